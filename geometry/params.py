@@ -6,7 +6,7 @@ comes from: a paper, the catalog, or an assumption); only the error sources defa
 Units are in the field names (mm, deg, GPa, ...); stages convert to SI at their own edges.
 
 Limits: the checks here are necessary conditions for a buildable second stage (conjugate cycloid,
-no cusp, no undercut of the modified profile is checked in `geometry.profile`), not a design code.
+no cusp, no undercut of the modified profile is checked in `geometry.clearance`), not a design code.
 """
 from __future__ import annotations
 
@@ -279,6 +279,8 @@ def validate(case: ReducerCase) -> ReducerCase:
                         f"cuts into the crank holes (allowed < "
                         f"{cr.crank_circle_radius_mm - case.disc.crank_hole_radius_mm:g} mm)")
     _check_errors(case)
+    from geometry.clearance import check_undercut   # local: clearance builds on this module
+    check_undercut(case)                             # < 1 ms: the modified profile must not loop
     return case
 
 

@@ -3,14 +3,23 @@
 Header `time_s,input_angle_deg,output_angle_deg,output_torque_Nm`, unwrapped encoder angles
 (positive forward), torque positive when the load resists forward rotation, `#` comment lines
 first, more columns allowed after the four.
+
+Loader (`read_record`): checks every row and names the file and the 1-based line of the problem
+(missing column, non-numeric or non-finite value, non-increasing time, wrapped angle, shorter than
+one output revolution). Other column names or headerless files are read only through an explicit
+column map: nothing is guessed. The conditions the diagnosis simulates (input speed, torque,
+direction) are read from the record's own samples, not from its comments; comments are kept
+(they carry notes such as `# encoder_zero: <id>`).
 """
 from __future__ import annotations
 
+import re
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from geometry.artifacts import atomic_path
+from geometry.artifacts import InputError, atomic_path
 
 COLUMNS = ("time_s", "input_angle_deg", "output_angle_deg", "output_torque_Nm")
 
@@ -31,3 +40,195 @@ def write_record(path: str | Path, time_s, input_angle_deg, output_angle_deg, ou
     with atomic_path(path) as tmp:
         np.savetxt(tmp, np.column_stack(cols), delimiter=",", header=header, comments="",
                    fmt="%.10g")
+
+
+# ---------------------------------------------------------------------------------------------
+# Loader
+# ---------------------------------------------------------------------------------------------
+# A bench sampling one output revolution ends one sample short of closing it (n samples span
+# n - 1 steps); a record covers a revolution if its travel plus this many median steps reaches 360.
+_CLOSING_STEPS = 1.5
+# Largest plausible encoder step between two samples; a step this large is a wrap (+-360 deg).
+_MAX_STEP_DEG = 180.0
+
+
+class RecordError(InputError):
+    """A bench record that cannot be read as DESIGN.md's format; the message names file, row
+    (1-based line of the file) and problem."""
+
+
+@dataclass(frozen=True)
+class BenchRecord:
+    """One bench record as read, with the conditions the diagnosis needs read from the record.
+
+    Arrays are in the file's units (s, deg, N.m); `comments` are the `#` lines without the `#`.
+    """
+    path: str
+    time_s: np.ndarray
+    input_angle_deg: np.ndarray
+    output_angle_deg: np.ndarray
+    output_torque_Nm: np.ndarray
+    comments: tuple[str, ...] = ()
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        return Path(self.path).name
+
+    @property
+    def direction(self) -> int:
+        """+1 forward, -1 backward: the sign of the output travel (net, over the record)."""
+        return 1 if self.output_angle_deg[-1] >= self.output_angle_deg[0] else -1
+
+    @property
+    def output_travel_deg(self) -> float:
+        return float(abs(self.output_angle_deg[-1] - self.output_angle_deg[0]))
+
+    @property
+    def input_speed_rpm(self) -> float:
+        """Magnitude of the mean input speed (net input travel over the record's duration)."""
+        dur = self.time_s[-1] - self.time_s[0]
+        return float(abs(self.input_angle_deg[-1] - self.input_angle_deg[0]) / dur / 6.0)
+
+    @property
+    def torque_Nm(self) -> float:
+        """Median output torque (signed: positive resists forward rotation)."""
+        return float(np.median(self.output_torque_Nm))
+
+    @property
+    def encoder_zero(self) -> str | None:
+        """The id of an explicit `# encoder_zero: <id>` comment, if the record carries one."""
+        for line in self.comments:
+            m = re.match(r"\s*encoder_zero\s*[:=]\s*(\S+)", line)
+            if m:
+                return m.group(1)
+        return None
+
+    def te_arcsec(self, ratio: float) -> np.ndarray:
+        """Transmission error theta_out - theta_in / i (arcsec, positive = output ahead)."""
+        return (self.output_angle_deg - self.input_angle_deg / ratio) * 3600.0
+
+
+def parse_column_map(text: str) -> dict[str, str | int]:
+    """`time_s=t,output_angle_deg=3,...` -> {required column: source name or 0-based index}."""
+    out: dict[str, str | int] = {}
+    for item in filter(None, (s.strip() for s in text.split(","))):
+        key, sep, value = item.partition("=")
+        key, value = key.strip(), value.strip()
+        if not sep or key not in COLUMNS or not value:
+            raise RecordError(f"column map {text!r}: item {item!r} must be NAME=SOURCE with NAME one "
+                              f"of {', '.join(COLUMNS)} and SOURCE a column name or 0-based index")
+        out[key] = int(value) if value.isdigit() else value
+    return out
+
+
+def read_record(path: str | Path, columns: dict[str, str | int] | None = None,
+                header: bool = True) -> BenchRecord:
+    """Read and check a bench record; raise RecordError naming file, row and problem.
+
+    `columns` maps a required column to the source's name (or 0-based index); it is the only way
+    to read other names (`header=True`) or headerless files (`header=False`, indices required).
+    Without it the four DESIGN.md names must be present: nothing is guessed.
+    """
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except FileNotFoundError:
+        raise RecordError(f"{path}: record not found") from None
+    except UnicodeDecodeError as exc:
+        raise RecordError(f"{path}: not a text file ({exc.reason})") from None
+    comments, rows = [], []
+    for lineno, line in enumerate(lines, start=1):
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            if not rows:    # comments carry the conditions; keep those before the data
+                comments.append(s[1:].strip())
+            continue
+        rows.append((lineno, [c.strip() for c in s.split(",")]))
+    columns = dict(columns or {})
+    if header:
+        if not rows:
+            raise RecordError(f"{path}: no header row (expected {','.join(COLUMNS)})")
+        head_line, names = rows.pop(0)
+        idx = {}
+        for col in COLUMNS:
+            src = columns.get(col, col)
+            if isinstance(src, int):
+                if src >= len(names):
+                    raise RecordError(f"{path}: row {head_line}: column index {src} for {col} beyond "
+                                      f"the {len(names)} columns of the header")
+                idx[col] = src
+            elif src in names:
+                idx[col] = names.index(src)
+            else:
+                hint = "" if columns else " (use a column map for other names)"
+                raise RecordError(f"{path}: row {head_line}: missing column {src!r} for {col}; "
+                                  f"header has {', '.join(names)}{hint}")
+    else:
+        missing = [c for c in COLUMNS if not isinstance(columns.get(c), int)]
+        if missing:
+            raise RecordError(f"{path}: a headerless record needs a 0-based column index for "
+                              f"{', '.join(missing)} (column map NAME=INDEX)")
+        idx = {c: columns[c] for c in COLUMNS}
+        names = None
+    if not rows:
+        raise RecordError(f"{path}: no data rows")
+    data = np.empty((len(rows), len(COLUMNS)))
+    width = max(idx.values()) + 1
+    for r, (lineno, cells) in enumerate(rows):
+        if len(cells) < width:
+            raise RecordError(f"{path}: row {lineno}: {len(cells)} values, expected at least {width}")
+        for j, col in enumerate(COLUMNS):
+            cell = cells[idx[col]]
+            try:
+                v = float(cell)
+            except ValueError:
+                raise RecordError(f"{path}: row {lineno}: {col} = {cell!r} is not a number") from None
+            if not np.isfinite(v):
+                raise RecordError(f"{path}: row {lineno}: {col} = {cell!r}; values must be finite "
+                                  f"(no NaN or inf)")
+            data[r, j] = v
+    extra = {}
+    if names is not None:
+        for k, nm in enumerate(names):
+            if k not in idx.values():
+                vals = [float(c[k]) if k < len(c) and _is_number(c[k]) else np.nan for _, c in rows]
+                extra[nm] = np.asarray(vals)
+    t, a_in, a_out, torque = data.T
+    _check_record(path, [ln for ln, _ in rows], t, a_in, a_out)
+    return BenchRecord(str(path), t, a_in, a_out, torque, tuple(comments), extra)
+
+
+def _is_number(s: str) -> bool:
+    try:
+        float(s)
+        return True
+    except ValueError:
+        return False
+
+
+def _check_record(path: Path, linenos: list[int], t, a_in, a_out) -> None:
+    if len(t) < 3:
+        raise RecordError(f"{path}: {len(t)} data rows; a record needs at least one output revolution")
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0)
+    if bad.size:
+        k = bad[0] + 1
+        raise RecordError(f"{path}: row {linenos[k]}: time_s = {t[k]:g} does not increase "
+                          f"(previous {t[k - 1]:g}); time must be strictly increasing")
+    for name, a in (("input_angle_deg", a_in), ("output_angle_deg", a_out)):
+        step = np.diff(a)
+        jump = np.flatnonzero(np.abs(step) > _MAX_STEP_DEG)
+        if jump.size:
+            k = jump[0] + 1
+            raise RecordError(f"{path}: row {linenos[k]}: {name} jumps by {step[k - 1]:+.3f} deg "
+                              f"between samples: the angle is wrapped, not unwrapped (steps must "
+                              f"stay below {_MAX_STEP_DEG:g} deg; unwrap it, e.g. numpy.unwrap)")
+    travel = abs(a_out[-1] - a_out[0])
+    closing = _CLOSING_STEPS * float(np.median(np.abs(np.diff(a_out))))
+    if travel + closing < 360.0:
+        raise RecordError(f"{path}: row {linenos[-1]}: the output turns {travel:.2f} deg over the "
+                          f"record; at least one output revolution (360 deg) is needed to resolve "
+                          f"the 1x order")

@@ -1,0 +1,197 @@
+"""3D crankshaft bending and torsion (P2 tetrahedra from pytetwild, scikit-fem), and the
+plain-shaft verification against beam theory.
+
+Crankshaft model (own stepped solid until geometry.solids exists): planet seat (journal radius,
+one journal length) | journal 1 centred at z = 0 | shaft at journal radius | eccentric 1 and
+eccentric 2 (eccentric radius, one disc width each, offsets +e and -e along x) centred about
+span/2 | shaft | journal 2 centred at z = span.
+Supports: the support bearings act as pins: the lateral DOFs of the journal-surface nodes in a
+band of one element at each bearing centre are held (axial DOF held at bearing 1 only), so the
+shaft is simply supported at the bearing centres (the bearings' own compliance is the separate
+support_bearing spring). Loads are uniform tractions (resultants F or T) on the eccentric's
+cylindrical surface or the planet-seat end face; deflections are averages over the loaded
+region (the lumped model's node), rotations least-squares over the section.
+Limits: linear elastic, no fillets, no keyways/splines, needle-race hardening ignored.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fem import elastic
+from fem.mesh import Mesh3D, tet_mesh_from_solid
+
+
+@dataclass(frozen=True)
+class ShaftResult:
+    bending_stiffness_N_per_m: float
+    torsional_stiffness_Nm_per_rad: float
+    dofs: int
+    edge_length_m: float
+
+
+def _traction(basis_cls, mesh, facets, elem, vec_fn):
+    from skfem import FacetBasis, LinearForm, asm
+    fb = FacetBasis(mesh, elem, facets=facets)
+
+    @LinearForm
+    def form(v, w):
+        t = vec_fn(w.x)
+        return sum(t[i] * v[i] for i in range(3))
+    return asm(form, fb), fb
+
+
+def _area(mesh, facets, elem) -> float:
+    from skfem import FacetBasis, Functional, asm
+    fb = FacetBasis(mesh, elem, facets=facets)
+    return float(asm(Functional(lambda w: 1.0 + 0 * w.x[0]), fb))
+
+
+def _polar_moment(mesh, facets, elem) -> float:
+    """Integral of x^2 + y^2 over the facets (the meshed section, not the ideal circle)."""
+    from skfem import FacetBasis, Functional, asm
+    fb = FacetBasis(mesh, elem, facets=facets)
+    return float(asm(Functional(lambda w: w.x[0] ** 2 + w.x[1] ** 2), fb))
+
+
+def _solve_3d(mesh3: Mesh3D, E: float, nu: float, fixed_fn, load_fn):
+    """Assemble P2 elasticity, hold DOFs chosen by fixed_fn(basis), load by load_fn(basis)."""
+    basis = elastic.basis_3d(mesh3, order=2)
+    K = elastic.stiffness(basis, E, nu)
+    fixed = fixed_fn(basis)
+    fac = elastic.Factorized.of(K, fixed)
+    return basis, fac, load_fn
+
+
+def _dof_xyz(basis) -> np.ndarray:
+    """Coordinates of every DOF (3 per location), from the basis' global DOF locations."""
+    return basis.doflocs.T
+
+
+def plain_shaft_check(radius_m: float = 5e-3, length_m: float = 100e-3, E: float = 206e9,
+                      nu: float = 0.3, edge_length_m: float = 2.5e-3) -> dict:
+    """Cantilever plain shaft: end face z = 0 clamped, tip face z = L loaded by a transverse
+    force F and separately by a torque T. FE (tip-face averages) against Timoshenko beam theory
+    and Saint-Venant torsion (fem.hertz)."""
+    import cadquery as cq
+    from fem import hertz
+    solid = cq.Workplane("XY").circle(radius_m * 1e3).extrude(length_m * 1e3)
+    m3 = tet_mesh_from_solid(solid, edge_length_m)
+    F, T = 100.0, 10.0
+    res = _cantilever(m3, radius_m, length_m, E, nu, F, T)
+    res["bending_closed_form_m"] = hertz.cantilever_tip_deflection(F, length_m, radius_m, E, nu)
+    res["twist_closed_form_rad"] = hertz.shaft_twist(T, length_m, radius_m, E, nu)
+    # the tessellated section is a polygon inside the circle: Saint-Venant with its own J
+    res["twist_closed_form_meshed_section_rad"] = T * length_m / (E / (2 * (1 + nu)) * res["tip_J_m4"])
+    res["bending_error"] = res["tip_deflection_m"] / res["bending_closed_form_m"] - 1
+    res["torsion_error"] = res["twist_rad"] / res["twist_closed_form_rad"] - 1
+    res["edge_length_m"] = edge_length_m
+    return res
+
+
+def _cantilever(m3: Mesh3D, radius_m, length_m, E, nu, F, T) -> dict:
+    from skfem import MeshTet
+    basis = elastic.basis_3d(m3, order=2)
+    mesh = basis.mesh
+    K = elastic.stiffness(basis, E, nu)
+    tol = 1e-3 * length_m
+    root = basis.get_dofs(lambda x: x[2] < tol).all()
+    fac = elastic.Factorized.of(K, root)
+    tip = mesh.facets_satisfying(lambda x: x[2] > length_m - tol)
+    elem = basis.elem
+    area = _area(mesh, tip, elem)
+    f_b, fb = _traction(None, mesh, tip, elem, lambda x: np.array([0 * x[0] + F / area, 0 * x[0], 0 * x[0]]))
+    J = _polar_moment(mesh, tip, elem)
+    f_t, _ = _traction(None, mesh, tip, elem, lambda x: np.array([-T * x[1] / J, T * x[0] / J, 0 * x[0]]))
+    u = fac.solve(np.column_stack([f_b, f_t]))
+    xyz = basis.doflocs
+    tipd = basis.get_dofs(tip)
+    ix, iy = tipd.nodal["u^1"], tipd.nodal["u^2"]
+    ux_mean = float(u[ix, 0].mean())
+    x, y = xyz[0, ix], xyz[1, ix]
+    rot = float(np.sum(x * u[iy, 1] - y * u[ix, 1]) / np.sum(x * x + y * y))
+    return {"tip_deflection_m": ux_mean, "twist_rad": rot, "dofs": int(K.shape[0]), "tip_J_m4": J}
+
+
+def crankshaft_solid(case):
+    """Own stepped crankshaft (mm, z along the axis, z = 0 at the first support-bearing centre)."""
+    import cadquery as cq
+    k, c = case.crankshaft, case.cycloid
+    rj, re, Lj, span, w, e = (k.journal_radius_mm, k.eccentric_radius_mm, k.journal_length_mm,
+                              k.support_span_mm, c.width_mm, c.eccentricity_mm)
+    z0 = -Lj / 2 - Lj                                # planet seat starts here
+    body = cq.Workplane("XY").workplane(offset=z0).circle(rj).extrude(span + Lj / 2 - z0)
+    for sign, zc in ((+1, span / 2 - w / 2), (-1, span / 2 + w / 2)):
+        ecc = cq.Workplane("XY").workplane(offset=zc - w / 2).center(sign * e, 0).circle(re).extrude(w)
+        body = body.union(ecc)
+    return body, {"planet_seat_z_mm": (z0, -Lj / 2), "journals_z_mm": ((-Lj / 2, Lj / 2), (span - Lj / 2, span + Lj / 2)),
+                  "eccentrics_z_mm": ((span / 2 - w, span / 2), (span / 2, span / 2 + w))}
+
+
+def crankshaft_stiffness(case, edge_length_m: float | None = None) -> tuple[ShaftResult, dict]:
+    """Lateral stiffness at eccentric 1 (force along x, shaft pinned at the bearing centres) and
+    torsional stiffness from the planet-seat end face to eccentric 1 (eccentric surface held)."""
+    from skfem import MeshTet  # noqa: F401
+    k, c = case.crankshaft, case.cycloid
+    E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
+    solid, zones = crankshaft_solid(case)
+    h = edge_length_m or k.journal_radius_mm * 1e-3 / 2.5
+    m3 = tet_mesh_from_solid(solid, h)
+    basis = elastic.basis_3d(m3, order=2)
+    mesh = basis.mesh
+    K = elastic.stiffness(basis, E, nu)
+    rj, re, e = k.journal_radius_mm * 1e-3, k.eccentric_radius_mm * 1e-3, c.eccentricity_mm * 1e-3
+    span = k.support_span_mm * 1e-3
+    band = 0.6 * h
+    on_journal = lambda x: np.abs(np.hypot(x[0], x[1]) - rj) < 0.03 * rj  # noqa: E731
+    d1 = basis.get_dofs(lambda x: on_journal(x) & (np.abs(x[2]) < band))
+    d2 = basis.get_dofs(lambda x: on_journal(x) & (np.abs(x[2] - span) < band))
+    fixed = np.concatenate([d1.nodal["u^1"], d1.nodal["u^2"], d1.nodal["u^3"],
+                            d2.nodal["u^1"], d2.nodal["u^2"]])
+    for d in (d1, d2):
+        if len(d.nodal["u^1"]) < 3:
+            raise RuntimeError("support band caught too few nodes: refine the crankshaft mesh")
+    fac = elastic.Factorized.of(K, fixed)
+    ez0, ez1 = (z * 1e-3 for z in zones["eccentrics_z_mm"][0])
+    ecc_surf = mesh.facets_satisfying(lambda x: (np.abs(np.hypot(x[0] - e, x[1]) - re) < 0.03 * re)
+                                      & (x[2] > ez0 - 1e-9) & (x[2] < ez1 + 1e-9))
+    area = _area(mesh, ecc_surf, basis.elem)
+    F = 1000.0
+    f, _ = _traction(None, mesh, ecc_surf, basis.elem, lambda x: np.array([0 * x[0] + F / area, 0 * x[0], 0 * x[0]]))
+    u = fac.solve(f)
+    de = basis.get_dofs(ecc_surf)
+    kb = F / float(u[de.nodal["u^1"]].mean())
+    # torsion: eccentric 1 surface held, torque on the planet-seat end face
+    fac_t = elastic.Factorized.of(K, np.concatenate([de.nodal["u^1"], de.nodal["u^2"], de.nodal["u^3"]]))
+    zs = zones["planet_seat_z_mm"][0] * 1e-3
+    face = mesh.facets_satisfying(lambda x: x[2] < zs + 1e-3 * span)
+    T = 10.0
+    J = _polar_moment(mesh, face, basis.elem)
+    ft, _ = _traction(None, mesh, face, basis.elem, lambda x: np.array([-T * x[1] / J, T * x[0] / J, 0 * x[0]]))
+    ut = fac_t.solve(ft)
+    dfc = basis.get_dofs(face)
+    ix, iy = dfc.nodal["u^1"], dfc.nodal["u^2"]
+    x, y = basis.doflocs[0, ix], basis.doflocs[1, ix]
+    rot = float(np.sum(x * ut[iy] - y * ut[ix]) / np.sum(x * x + y * y))
+    result = ShaftResult(kb, T / rot, int(K.shape[0]), h)
+    pictures = {"mesh": m3, "displacement_m": u, "basis": basis}
+    return result, pictures
+
+
+def crankshaft_beam_estimate(case) -> dict:
+    """Beam-theory figures of the same stepped shaft for a sanity band: simply supported span,
+    load at the eccentric centre, journal-radius section (lower bound of the stiffness), and
+    the twist of a journal-radius shaft from the planet-seat face to the eccentric."""
+    from fem import hertz
+    k, c = case.crankshaft, case.cycloid
+    E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
+    L = k.support_span_mm * 1e-3
+    a = (k.support_span_mm / 2 - c.width_mm / 2) * 1e-3
+    b = L - a
+    I, J = hertz.circle_inertia(k.journal_radius_mm * 1e-3)
+    defl = a * a * b * b / (3 * E * I * L)            # per newton, load at a from one support
+    G = E / (2 * (1 + nu))
+    length_t = (1.5 * k.journal_length_mm + a * 1e3) * 1e-3
+    return {"bending_stiffness_N_per_m": 1 / defl, "torsional_stiffness_Nm_per_rad": G * J / length_t}

@@ -1,0 +1,50 @@
+"""`python -m pipeline diagnose --case CASE.toml --measured R1.csv [R2.csv ...] --out DIR`
+
+Writes DIR/diagnosis.json (DESIGN.md keys) and DIR/index.html. Stiffness defaults to
+build/<case.name>/fem/stiffness.json. `--columns NAME=SOURCE,...` (and `--no-header`) read records
+with other column names or none; nothing is guessed.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from geometry.artifacts import InputError
+
+
+class DiagnoseError(InputError):
+    """A diagnose request that cannot run (missing stiffness, no records)."""
+
+
+def register(sub) -> None:
+    p = sub.add_parser("diagnose", help="diagnose bench records against the model")
+    p.add_argument("--case", required=True)
+    p.add_argument("--measured", required=True, nargs="+")
+    p.add_argument("--out", required=True)
+    p.add_argument("--stiffness", default=None, help="stiffness.json (default build/<case>/fem/stiffness.json)")
+    p.add_argument("--columns", default=None, help="column map NAME=SOURCE,... (SOURCE a name or 0-based index)")
+    p.add_argument("--no-header", action="store_true", help="records have no header row (needs --columns)")
+    p.add_argument("--points-per-rev", type=int, default=1024, help="simulated points per output revolution")
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from fem.stiffness import load as load_stiffness
+    from geometry.params import load_case
+    from pipeline.diagnosis.diagnose import diagnose
+    from pipeline.diagnosis.report import write_report
+    from pipeline.records import parse_column_map, read_record
+    case = load_case(args.case)
+    spath = Path(args.stiffness) if args.stiffness else Path("build") / case.name / "fem" / "stiffness.json"
+    if not spath.exists():
+        raise DiagnoseError(f"{spath}: stiffness not found; run `python -m pipeline fem --case {args.case}` "
+                            f"first or pass --stiffness PATH")
+    stiffness = load_stiffness(spath)
+    cols = parse_column_map(args.columns) if args.columns else None
+    records = [read_record(p, cols, header=not args.no_header) for p in args.measured]
+    diag = diagnose(case, stiffness, records, points_per_rev=args.points_per_rev)
+    out = write_report(diag, case, args.out)
+    if not args.quiet:
+        print(f"diagnose: cause {diag.cause}; baseline RMS {diag.residual_rms_arcsec:.2f} arcsec"
+              + (f"; gain {diag.extension.gain:.3f}" if diag.extension else "") + f" -> {out}")
+    return 0

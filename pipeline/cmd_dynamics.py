@@ -1,0 +1,185 @@
+"""`simulate`, `matrix`, `hysteresis`: the dynamics stage's commands (DESIGN.md CLI contracts).
+
+  python -m pipeline simulate --case CASE.toml --load FORM:TORQUE_NM [--duration S] [--speed-rpm N] --out RECORD.csv
+  python -m pipeline matrix --case CASE.toml --out DIR [--scheduler ADDRESS]
+  python -m pipeline hysteresis --case CASE.toml --out DIR
+The stiffness comes from the FEM stage (default build/<case name>/fem/stiffness.json).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import time
+from pathlib import Path
+
+import numpy as np
+
+from geometry.artifacts import InputError, write_json_atomic, write_text_atomic
+
+
+def _stiffness_path(args, case) -> Path:
+    path = Path(args.stiffness) if args.stiffness else Path("build") / case.name / "fem" / "stiffness.json"
+    if not path.exists():
+        raise InputError(f"--stiffness {path}: not found; run `python -m pipeline fem --case {case.source} "
+                         f"--out build/{case.name}/fem` first (or pass --stiffness PATH)")
+    return path
+
+
+def _model(args):
+    from dynamics.model import build_model
+    from fem.stiffness import load as load_stiffness
+    from geometry.params import load_case
+    case = load_case(args.case)
+    path = _stiffness_path(args, case)
+    return build_model(case, load_stiffness(path)), path
+
+
+def _say(args, msg: str) -> None:
+    if not args.quiet:
+        print(msg, flush=True)
+
+
+def cmd_simulate(args) -> int:
+    from dynamics.loads import LoadSpec
+    from dynamics.model import simulate
+    load = LoadSpec.parse(args.load)
+    model, spath = _model(args)
+    t0 = time.perf_counter()
+    res = simulate(model, load, duration_s=args.duration, input_speed_rpm=args.speed_rpm,
+                   direction=-1 if args.backward else 1, dt_s=args.dt, store_pin_forces=False)
+    wall = time.perf_counter() - t0
+    res.to_record(args.out, comments=[
+        f"simulated by rvte dynamics: case {model.case.name}, load {load}, "
+        f"speed {res.meta['input_speed_rpm']:g} rpm, {'backward' if args.backward else 'forward'}",
+        f"stiffness {spath}; dt {res.meta['dt_s']:g} s; {res.meta['solver']}",
+        "encoder_zero: simulation (TE = 0 at the unloaded kinematic zero)"])
+    _say(args, f"simulate: {args.out}: {res.t_s[-1]:.3g} s simulated in {wall:.1f} s, "
+               f"TE sigma (t >= 2 s) = {res.std_arcsec(2.0) if res.t_s[-1] >= 2 else res.std_arcsec():.4g} arcsec")
+    return 0
+
+
+def _plot_te(results, case, out: Path) -> None:
+    from dynamics.matrix import characteristic_orders
+    from pipeline.render import figure, save_figure
+    fig, axes = figure(2, 1, figsize=(10, 8))
+    for r in results:
+        d = np.load(out / f"{r['name']}.npz")
+        axes[0].plot(d["t_s"], d["te_arcsec"], lw=0.6, label=r["name"])
+        if r["spectrum"] is not None:
+            o, a = r["spectrum"]
+            axes[1].semilogy(o[1:], a[1:] + 1e-6, lw=0.6)
+    axes[0].set_xlabel("time [s]")
+    axes[0].set_ylabel("TE [arcsec]")
+    axes[0].legend(fontsize=6, ncol=4)
+    for name, o in characteristic_orders(case).items():
+        axes[1].axvline(o, color="k", ls=":", lw=0.6)
+        axes[1].text(o, axes[1].get_ylim()[1], name, rotation=90, va="top", fontsize=6)
+    axes[1].set_xscale("log")
+    axes[1].set_xlabel("order [cycles per output revolution]")
+    axes[1].set_ylabel("TE amplitude [arcsec]")
+    save_figure(fig, out / "te_matrix.png")
+
+
+def cmd_matrix(args) -> int:
+    from dynamics.loads import FORMS
+    from dynamics.matrix import (PAPER_001_SIGMA_ARCSEC, STEADY_FROM_S, TORQUES_NM, characteristic_orders,
+                                 run_case, sigma_table)
+    from geometry.params import load_case
+    from pipeline.sweep import run_tasks
+    case = load_case(args.case)
+    spath = _stiffness_path(args, case)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    tasks = [(str(Path(args.case).resolve()), str(spath.resolve()), form, T, args.duration, str(out.resolve()),
+              args.dt) for T in TORQUES_NM for form in FORMS]
+    t0 = time.perf_counter()
+    results = run_tasks(run_case, tasks, scheduler=args.scheduler,
+                        progress=None if args.quiet else lambda i, n: print(f"matrix: {i}/{n}", flush=True))
+    wall = time.perf_counter() - t0
+    tab, whole = sigma_table(results), sigma_table(results, "sigma_whole_arcsec")
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["torque_Nm", *FORMS])
+    for T, row in zip(TORQUES_NM, tab):
+        w.writerow([f"{T:g}", *(f"{v:.6g}" for v in row)])
+    write_text_atomic(out / "te_std.csv", buf.getvalue())
+    orders = characteristic_orders(case)
+    lines = ["# TE standard deviation: this model beside paper 001", "",
+             f"Case `{case.name}`, stiffness `{spath}` ({'TEST STAND-IN' if 'STAND-IN' in str(load_sources(spath)) else 'FE'}), "
+             f"{args.duration:g} s per run, sigma over t >= {STEADY_FROM_S:g} s (population sigma, paper 001's formula). "
+             f"Matrix wall time {wall:.1f} s.", "",
+             "| torque N m | " + " | ".join(f"{f} ours | {f} paper 001 | {f} ours whole run" for f in FORMS) + " |",
+             "|---" * (1 + 3 * len(FORMS)) + "|"]
+    for i, T in enumerate(TORQUES_NM):
+        cells = [f"{tab[i, j]:.3f} | {PAPER_001_SIGMA_ARCSEC[i, j]:.3f} | {whole[i, j]:.3f}" for j in range(len(FORMS))]
+        lines.append(f"| {T:g} | " + " | ".join(cells) + " |")
+    lines += ["", "Characteristic-order amplitudes of TE [arcsec] (steady part):", "",
+              "| run | " + " | ".join(orders) + " |", "|---" * (1 + len(orders)) + "|"]
+    for r in results:
+        lines.append(f"| {r['name']} | " + " | ".join(f"{r['lines'].get(k, float('nan')):.3g}" for k in orders) + " |")
+    write_text_atomic(out / "comparison.md", "\n".join(lines) + "\n")
+    write_json_atomic(out / "matrix.json", {"wall_s": wall, "runs": [
+        {k: v for k, v in r.items() if k != "spectrum"} for r in results]})
+    _plot_te(results, case, out)
+    _say(args, f"matrix: {out}/te_std.csv, comparison.md ({wall:.1f} s wall)")
+    return 0
+
+
+def load_sources(path: Path) -> dict:
+    import json
+    return json.loads(Path(path).read_text()).get("sources", {})
+
+
+def cmd_hysteresis(args) -> int:
+    from dynamics.catalog import hysteresis
+    from pipeline.render import figure, save_figure
+    model, spath = _model(args)
+    res = hysteresis(model)
+    out = Path(args.out)
+    write_json_atomic(out / "hysteresis.json", {"case": model.case.name, "stiffness": str(spath),
+                                                **res.summary()})
+    buf = io.StringIO()
+    np.savetxt(buf, np.column_stack([res.torque_Nm, res.output_angle_arcmin]), delimiter=",",
+               header="output_torque_Nm,output_angle_arcmin", comments="", fmt="%.8g")
+    write_text_atomic(out / "hysteresis.csv", buf.getvalue())
+    fig, ax = figure(figsize=(7, 5))
+    ax.plot(res.output_angle_arcmin, res.torque_Nm, ".-", lw=0.8)
+    ax.set_xlabel("output angle, input locked [arcmin]")
+    ax.set_ylabel("output torque [N m] (positive resists forward rotation)")
+    ax.set_title(f"{model.case.name}: rigidity {res.torsional_rigidity_Nm_per_arcmin:.0f} N m/arcmin, "
+                 f"lost motion {res.lost_motion_arcmin:.2f} arcmin")
+    ax.grid(True, lw=0.3)
+    save_figure(fig, out / "hysteresis.png")
+    _say(args, f"hysteresis: {out}/hysteresis.json: rigidity {res.torsional_rigidity_Nm_per_arcmin:.1f} "
+               f"N m/arcmin, lost motion {res.lost_motion_arcmin:.3f} arcmin, backlash {res.backlash_arcmin:.3f} arcmin")
+    return 0
+
+
+def _common(p) -> None:
+    p.add_argument("--case", required=True, help="case TOML")
+    p.add_argument("--stiffness", default=None,
+                   help="stiffness.json (default build/<case name>/fem/stiffness.json)")
+    p.add_argument("--quiet", action="store_true")
+
+
+def register(sub) -> None:
+    p = sub.add_parser("simulate", help="simulate one bench run -> record CSV")
+    _common(p)
+    p.add_argument("--load", required=True, help="FORM:TORQUE_NM, FORM in constant, square, sine")
+    p.add_argument("--duration", type=float, default=7.0, help="seconds (default 7, paper 001)")
+    p.add_argument("--speed-rpm", type=float, default=None, help="input speed (default 1200, paper 001)")
+    p.add_argument("--backward", action="store_true", help="run backward (record torque negative)")
+    p.add_argument("--dt", type=float, default=None, help="time step [s] (default 1e-4)")
+    p.add_argument("--out", required=True, help="record CSV")
+    p.set_defaults(func=cmd_simulate)
+    p = sub.add_parser("matrix", help="paper 001's 12 load cases -> te_std.csv, comparison.md, plots")
+    _common(p)
+    p.add_argument("--out", required=True)
+    p.add_argument("--duration", type=float, default=7.0)
+    p.add_argument("--dt", type=float, default=None)
+    p.add_argument("--scheduler", default=None, help="Dask scheduler address (default: local processes)")
+    p.set_defaults(func=cmd_matrix)
+    p = sub.add_parser("hysteresis", help="catalog hysteresis test (input locked)")
+    _common(p)
+    p.add_argument("--out", required=True)
+    p.set_defaults(func=cmd_hysteresis)

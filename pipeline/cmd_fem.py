@@ -1,0 +1,152 @@
+"""`python -m pipeline fem`: the FEM stage (stiffness.json, meshes, pictures) or the Hertz benchmark.
+
+    python -m pipeline fem --case CASE.toml --out DIR [--mesh-size-mm H] [--quiet]
+    python -m pipeline fem --benchmark hertz --radius-mm R --width-mm L --load-N F --out DIR
+                           [--counter-radius-mm Rc] [--mesh-size-mm H]
+"""
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from geometry.artifacts import InputError, write_json_atomic
+
+
+def register(sub) -> None:
+    p = sub.add_parser("fem", help="FE stiffness of a case, or the Hertz contact benchmark")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--case", help="case TOML")
+    src.add_argument("--benchmark", choices=["hertz"], help="verification benchmark")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--mesh-size-mm", type=float, default=None,
+                   help="element size at the contact [mm] (default: 1/12 of the smallest Hertz half-width)")
+    p.add_argument("--radius-mm", type=float)
+    p.add_argument("--width-mm", type=float)
+    p.add_argument("--load-N", type=float)
+    p.add_argument("--counter-radius-mm", type=float, default=None)
+    p.add_argument("--quiet", action="store_true")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    if args.mesh_size_mm is not None and not (args.mesh_size_mm > 0):
+        raise InputError(f"--mesh-size-mm = {args.mesh_size_mm}: must be positive")
+    out = Path(args.out)
+    if args.benchmark:
+        return _benchmark(args, out)
+    return _case(args, out)
+
+
+def _benchmark(args, out: Path) -> int:
+    from fem.pin_contact import hertz_benchmark
+    for name in ("radius_mm", "width_mm", "load_N"):
+        if getattr(args, name) is None:
+            raise InputError(f"--benchmark hertz needs --{name.replace('_', '-')}")
+    rc = math.inf if args.counter_radius_mm is None else args.counter_radius_mm * 1e-3
+    r = hertz_benchmark(args.radius_mm * 1e-3, args.width_mm * 1e-3, args.load_N, counter_radius_m=rc,
+                        mesh_size_m=None if args.mesh_size_mm is None else args.mesh_size_mm * 1e-3)
+    write_json_atomic(out / "hertz.json", r.to_json())
+    if not args.quiet:
+        j = r.to_json()
+        print(f"hertz: p0 {j['peak_pressure_MPa']:.1f} MPa (closed form {j['peak_pressure_closed_form_MPa']:.1f}), "
+              f"b {j['half_width_mm'] * 1e3:.2f} um ({j['half_width_closed_form_mm'] * 1e3:.2f}), "
+              f"approach {j['approach_um']:.3f} um ({j['approach_closed_form_um']:.3f}) -> {out / 'hertz.json'}")
+    return 0
+
+
+def _case(args, out: Path) -> int:
+    from fem import stiffness
+    from fem.reduce import build_stiffness
+    from geometry.params import load_case
+    t0 = time.perf_counter()
+    case = load_case(args.case)
+    runres = build_stiffness(case, mesh_size_m=None if args.mesh_size_mm is None else args.mesh_size_mm * 1e-3)
+    stiffness.save(runres.model, out / "stiffness.json")
+    _write_meshes(runres, out)
+    _pictures(runres, out)
+    if not args.quiet:
+        m = runres.model
+        k = m.extras["tooth_secant_stiffness_at_rated_N_per_m"]
+        print(f"fem {case.name}: {len(m.pin_contact.position_deg)} positions x {len(m.pin_contact.load_N)} loads; "
+              f"tooth stiffness at rated load {min(k) / 1e6:.0f}..{max(k) / 1e6:.0f} N/um; crankshaft "
+              f"{m.crankshaft_bending_stiffness_N_per_m / 1e6:.0f} N/um, "
+              f"{m.crankshaft_torsional_stiffness_Nm_per_rad:.0f} N m/rad; {time.perf_counter() - t0:.0f} s "
+              f"-> {out / 'stiffness.json'}")
+    return 0
+
+
+def _write_meshes(runres, out: Path) -> None:
+    from fem.mesh import write_vtu
+    tm = runres.tooth_map
+    write_vtu(out / "disc_mesh.vtu", tm.disc_mesh.points, tm.disc_mesh.triangles)
+    write_vtu(out / "pin_mesh.vtu", tm.pin_mesh_local.points, tm.pin_mesh_local.triangles)
+    m3 = runres.crank_fields["mesh"]
+    write_vtu(out / "crankshaft_mesh.vtu", m3.points, m3.tetrahedra)
+
+
+def _disc_field(tm):
+    """Von Mises stress of the disc under the snapshot contact (one more solve, same factors)."""
+    from fem import elastic
+    from fem.contact import node_operator
+    snap = tm.snapshot
+    setup, res, fac = snap["setup"], snap["result"], snap["factor"]
+    x = tm.disc_mesh.points[setup.nodes]
+    d = snap["centre_m"] - x
+    n = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    B = node_operator(setup.nodes, -n, fac.n_dofs)
+    u = fac.solve(B.T @ (res.pressure_Pa * setup.tributary_m))   # per metre of width
+    basis = elastic.basis_2d(tm.disc_mesh)
+    return elastic.stress_2d(basis, u, snap["E_Pa"], snap["nu"])["von_mises"], u
+
+
+def _pictures(runres, out: Path) -> None:
+    import pyvista as pv
+    from pipeline import render
+    tm = runres.tooth_map
+    tri = tm.disc_mesh.triangles
+    pts3 = np.column_stack([tm.disc_mesh.points * 1e3, np.zeros(len(tm.disc_mesh.points))])
+    faces = np.column_stack([np.full(len(tri), 3), tri]).ravel()
+    disc = pv.PolyData(pts3, faces)
+    snap = tm.snapshot
+    pin_pts = tm.pin_mesh_local.points
+    rot = math.atan2(snap["normal"][1], snap["normal"][0]) - math.pi / 2
+    c, s = math.cos(rot), math.sin(rot)
+    pg = pin_pts @ np.array([[c, s], [-s, c]]) + snap["centre_m"]
+    pin = pv.PolyData(np.column_stack([pg * 1e3, np.zeros(len(pg))]),
+                      np.column_stack([np.full(len(tm.pin_mesh_local.triangles), 3), tm.pin_mesh_local.triangles]).ravel())
+    p = render.plotter()
+    p.add_mesh(disc, show_edges=True, color="lightsteelblue", edge_color="black", line_width=0.3)
+    p.add_mesh(pin, show_edges=True, color="wheat", edge_color="black", line_width=0.3)
+    p.add_text(f"disc tooth + pin mesh ({len(tm.disc_mesh.points)} + {len(pin_pts)} nodes), "
+               f"contact element {tm.mesh_size_m * 1e6:.2f} um", font_size=10, color="black")
+    p.view_xy()
+    render.screenshot(p, out / "mesh.png")
+    vm, _ = _disc_field(tm)
+    disc.cell_data["von Mises [MPa]"] = vm / 1e6
+    p = render.plotter()
+    p.add_mesh(disc, scalars="von Mises [MPa]", cmap="turbo", clim=[0, float(np.percentile(vm, 99.9)) / 1e6])
+    p.add_mesh(pin, style="wireframe", color="gray", line_width=0.3)
+    centre = snap["centre_m"] * 1e3 - snap["normal"] * 3.0
+    p.add_text(f"contact stress at {snap['position_deg']:.0f} deg, {snap['load_N']:.0f} N", font_size=10, color="black")
+    p.view_xy()
+    p.camera.focal_point = (*centre[:2], 0.0)
+    p.camera.position = (*centre[:2], 20.0)
+    p.camera.parallel_projection = True
+    p.camera.parallel_scale = 0.4
+    render.screenshot(p, out / "contact_stress.png")
+    f = runres.crank_fields
+    m3, basis, u = f["mesh"], f["basis"], f["displacement_m"]
+    nd = basis.nodal_dofs
+    uv = np.column_stack([u[nd[0]], u[nd[1]], u[nd[2]]])[: len(m3.points)]
+    grid = pv.UnstructuredGrid({pv.CellType.TETRA: m3.tetrahedra}, m3.points * 1e3)
+    grid.point_data["|u| [um]"] = np.linalg.norm(uv, axis=1) * 1e6
+    warped = grid.copy()
+    warped.points = grid.points + uv * 1e3 * (2.0 / max(np.abs(uv).max() * 1e3, 1e-12))
+    p = render.plotter()
+    p.add_mesh(warped, scalars="|u| [um]", cmap="viridis", show_edges=True, edge_color="gray", line_width=0.2)
+    p.add_text("crankshaft under 1 kN at eccentric 1 (deflection magnified)", font_size=10, color="black")
+    p.view_xz()
+    render.screenshot(p, out / "crankshaft.png")

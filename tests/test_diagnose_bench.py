@@ -1,0 +1,59 @@
+"""Blind diagnosis through the project's model: the virtual bench hides an effect (seeded cause,
+size, phase; encoder quantisation 2^22 counts/turn and 0.3 arcsec noise), diagnose finds it.
+
+Model: dynamics.model quasi-static path with tests/support.py's closed-form stiffness (RV-40E i=81).
+Records: forward/backward pairs at 3, 30 and 60 % of rated torque, one output revolution of 256
+samples each; the 30 % pair is held out of the fit (hold-out rule of diagnose.py).
+Tolerances: parameters within 5 % of the drawn value (the noise moves them < 0.5 % on these lines;
+5 % leaves room for the model's nonlinearity between the unit signature and the drawn size).
+crank_eccentricity_error is not among the causes here: the model's static solver does not converge
+with per-crank eccentricity errors of a few um (reported to the dynamics issue); its statistics
+are covered in test_diagnose_machinery.py with a stand-in model.
+"""
+import numpy as np
+import pytest
+
+from geometry.params import load_case
+from pipeline.diagnosis.bench import bench_records, draw_effect
+from pipeline.diagnosis.diagnose import diagnose
+from pipeline.diagnosis.simulate import quasi_static_te
+from pathlib import Path
+
+support = pytest.importorskip("support", reason="tests/support.py (stiffness stand-in) not present")
+CASE = load_case(Path(__file__).parents[1] / "cases" / "rv40e-81.toml")
+STIFF = support.stiffness_for_tests(CASE)
+PPR = 256
+CASES = [(c, s) for c in ("output_coaxiality", "torsional_stiffness", "backlash") for s in range(4)]
+TRUTH_KEY = {"output_coaxiality": "output_coaxiality_um", "torsional_stiffness": "stiffness_factor",
+             "backlash": "pin_clearance_um"}
+
+
+def _records(effects, seed):
+    return bench_records(quasi_static_te, CASE, STIFF, effects, seed=seed, samples_per_rev=PPR)
+
+
+@pytest.mark.parametrize("cause,seed", CASES)
+def test_the_model_finds_a_hidden_effect_blind(cause, seed):
+    eff = draw_effect(np.random.default_rng(100 + seed), CASE, cause)
+    d = diagnose(CASE, STIFF, _records([eff], 100 + seed), points_per_rev=PPR)
+    assert d.cause == cause, [(f.cause, f.score) for f in d.findings]
+    assert d.extension.gain >= 0.6 and d.extension.holdout_gain >= 0.6
+    key = TRUTH_KEY[cause]
+    assert d.extension.parameters[key] == pytest.approx(eff.truth[key], rel=0.05)
+    if cause == "output_coaxiality":
+        assert d.extension.parameters["output_coaxiality_phase_deg"] == pytest.approx(
+            eff.truth["output_coaxiality_phase_deg"], abs=2.0)
+
+
+def test_clean_records_through_the_model_name_no_cause():
+    d = diagnose(CASE, STIFF, _records([], 500), points_per_rev=PPR)
+    assert d.cause is None and d.extension is None
+    assert d.residual_rms_arcsec < 0.5   # noise 0.3 arcsec + quantisation 0.09 arcsec
+
+
+def test_coaxiality_and_softer_reducer_together_give_two_findings():
+    rng = np.random.default_rng(600)
+    effs = [draw_effect(rng, CASE, "output_coaxiality"), draw_effect(rng, CASE, "torsional_stiffness")]
+    d = diagnose(CASE, STIFF, _records(effs, 600), points_per_rev=PPR)
+    assert {f.cause for f in d.findings} >= {"output_coaxiality", "torsional_stiffness"}
+    assert d.extension.gain >= 0.6

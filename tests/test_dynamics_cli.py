@@ -1,0 +1,67 @@
+"""CLI contracts of the dynamics stage (DESIGN.md): simulate, hysteresis, matrix (short runs)."""
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from fem.stiffness import save
+from geometry.params import load_case
+from pipeline.cli import main
+from support import case_path, stiffness_for_tests
+
+
+@pytest.fixture(scope="module")
+def stiffness_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("fem") / "stiffness.json"
+    save(stiffness_for_tests(load_case(case_path())), path)
+    return path
+
+
+def test_simulate_writes_a_bench_record(tmp_path, stiffness_file):
+    out = tmp_path / "rec.csv"
+    rc = main(["simulate", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--load", "sine:200",
+               "--duration", "0.3", "--out", str(out), "--quiet"])
+    assert rc == 0
+    rows = [r for r in out.read_text().splitlines() if not r.startswith("#")]
+    assert rows[0].split(",")[:4] == ["time_s", "input_angle_deg", "output_angle_deg", "output_torque_Nm"]
+    data = np.loadtxt(rows[1:], delimiter=",")
+    assert data[-1, 0] == pytest.approx(0.3)
+    assert np.allclose(data[:, 3], 0.05 * 200 * np.sin(8 * data[:, 0]) + 200, atol=1e-6)
+
+
+def test_missing_stiffness_is_a_one_line_error_naming_the_fem_stage(tmp_path, capsys):
+    rc = main(["simulate", "--case", str(case_path()), "--stiffness", str(tmp_path / "none.json"),
+               "--load", "sine:200", "--out", str(tmp_path / "r.csv")])
+    assert rc == 2
+    assert "pipeline fem" in capsys.readouterr().err
+
+
+def test_hysteresis_writes_the_catalog_figures(tmp_path, stiffness_file):
+    rc = main(["hysteresis", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--out",
+               str(tmp_path), "--quiet"])
+    assert rc == 0
+    h = json.loads((tmp_path / "hysteresis.json").read_text())
+    for key in ("torsional_rigidity_Nm_per_arcmin", "lost_motion_arcmin", "backlash_arcmin"):
+        assert h[key] > 0
+    # backlash of the case's modification (dR = -5 um, dRr = +8 um). Closed form with the eccentric
+    # fixed: b0 = (dRr - dR sqrt(1 - K1^2)) / (E zc) per side (geometry/clearance.py, first order).
+    # With the INPUT locked the eccentric turns (1 + z1/z2) x the output, so the mismatch to the
+    # conjugate motion grows (zc + 1 + z1/z2) / zc times faster: backlash = 2 b0 zc / (zc + 1 + z1/z2)
+    K1 = 1.3 * 40 / 64
+    b0 = (8e-3 + 5e-3 * np.sqrt(1 - K1 ** 2)) / (1.3 * 39)
+    expected = 2 * np.rad2deg(b0) * 60 * 39 / (39 + 1 + 12 / 24)
+    assert h["backlash_arcmin"] == pytest.approx(expected, rel=5e-3)
+    assert h["lost_motion_arcmin"] > h["backlash_arcmin"]
+    assert (tmp_path / "hysteresis.csv").exists() and (tmp_path / "hysteresis.png").exists()
+
+
+def test_matrix_writes_the_sigma_table_with_twelve_cells(tmp_path, stiffness_file):
+    rc = main(["matrix", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--out", str(tmp_path),
+               "--duration", "0.1", "--dt", "2e-4", "--quiet"])
+    assert rc == 0
+    rows = list(csv.reader((tmp_path / "te_std.csv").open()))
+    assert rows[0] == ["torque_Nm", "constant", "square", "sine"]
+    assert [r[0] for r in rows[1:]] == ["100", "200", "300", "400"]
+    assert "14.154" in (tmp_path / "comparison.md").read_text()
+    assert len(list(tmp_path.glob("*.npz"))) == 12

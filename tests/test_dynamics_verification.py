@@ -1,0 +1,176 @@
+"""Verification of the lumped model (issue 4 item 5): kinematics, tangent, eigenfrequencies,
+quasi-static vs dynamic, time-step convergence, energy balance. Stiffness: tests/support.py stand-in."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from dynamics import kernels as kn
+from dynamics import model as dm
+from dynamics.loads import LoadSpec
+from dynamics.model import (DynamicsError, build_model, linearise, nominal_q, quasi_static, simulate,
+                            solve_static)
+from support import model_for_tests, stiffness_for_tests
+
+
+@pytest.fixture(scope="module")
+def model():
+    return model_for_tests()
+
+
+def test_rigid_body_kinematics_give_88_89_deg_s_at_7200_deg_s_for_i_81(model):
+    # paper 001: i = 1 + (z2/z1) zp = 81, 7200 deg/s -> 88.888... deg/s; eccentric turns -zc x output
+    assert model.ratio == 81.0
+    q1, q2 = nominal_q(model, 0.0), nominal_q(model, math.radians(7200.0))
+    assert math.degrees(q2[0] - q1[0]) == pytest.approx(7200.0 / 81.0, rel=1e-15)
+    assert (q2[1] - q1[1]) / (q2[0] - q1[0]) == pytest.approx(-39.0, rel=1e-14)
+
+
+def test_simulated_output_speed_is_88_89_deg_s_in_steady_state(model):
+    # loaded (sine:100 never unloads, so the output does not wander inside the backlash)
+    r = simulate(model, LoadSpec("sine", 100.0), duration_s=2.0, dt_s=2e-4)
+    m = r.t_s >= 1.2
+    slope = np.polyfit(r.t_s[m], r.output_angle_deg[m], 1)[0]
+    assert slope == pytest.approx(7200.0 / 81.0, rel=2e-5)   # windup swing +-5 N m: < 1 arcsec over 0.8 s
+
+
+def test_conjugate_profile_without_modification_has_zero_kinematic_error():
+    case = model_for_tests().case.replace("modification", offset_mm=0.0, equidistant_mm=0.0)
+    m = build_model(case, stiffness_for_tests(case))
+    s = solve_static(m, 3.0, 0.01)        # 0.01 N m: elastic part far below 0.1 arcsec
+    assert abs(s.te_arcsec) < 0.1
+    assert (s.teeth_in_contact >= 10).all()   # the unmodified profile touches about half the pins
+
+
+def test_tangent_matches_finite_differences_of_the_forces(model):
+    s = solve_static(model, 10.0, 300.0)
+    K, _ = linearise(model, s)
+    w = dm._workspace(model)
+    geo = model.geo.copy()
+    geo[kn.G_BETA] = 0.0
+
+    def f(q):
+        kn.assemble(q, np.zeros_like(q), math.radians(10.0), 0.0, geo, model.pins, model.cranks, model.law,
+                    model.disc_rotation, dm._fresh_tws(model), False, w["f"], w["K"], w["C"], w["pf"],
+                    w["pg"], w["br"], w["mf"])
+        return w["f"].copy()
+
+    Kfd = np.zeros_like(K)
+    for j in range(model.n_dof):
+        h = 1e-9 / model.scale[j]
+        e = np.zeros(model.n_dof)
+        e[j] = h
+        Kfd[:, j] = -(f(s.q + e) - f(s.q - e)) / (2 * h)
+    S = np.diag(1 / model.scale)
+    # geometric (force x curvature) terms are left out of the tangent: measured 1.2e-4
+    assert np.abs(S @ (K - Kfd) @ S).max() < 1e-3 * np.abs(S @ K @ S).max()
+
+
+def test_static_equilibrium_balances_power_and_load_sharing(model):
+    T = 300.0
+    s = solve_static(model, 25.0, T)
+    # frictionless: input torque = T / i up to the finite-deformation change of the ratio (~3e-4)
+    assert s.input_torque_Nm == pytest.approx(T / model.ratio, rel=1e-3)
+    # the two discs 180 deg apart share the load: totals within 5 % of each other
+    tot = s.pin_force_N.sum(axis=1)
+    assert abs(tot[0] - tot[1]) < 0.05 * tot.mean()
+    assert s.load_share.sum(axis=1) == pytest.approx([1.0, 1.0])
+    # output torque balance: the pin housing reacts T (1 - 1/i) (moment of the pin forces)
+    th = model.pins[:, 3]
+    moment = 0.0
+    for d in range(model.n_disc):
+        i = model.disc_index(d)
+        c, al = s.q[i:i + 2], s.q[i + 2] + model.disc_rotation[d]
+        for k in np.flatnonzero(s.pin_force_N[d] > 0):
+            P = model.pins[k, :2]
+            pb = np.array([[math.cos(al), math.sin(al)], [-math.sin(al), math.cos(al)]]) @ (P - c)
+            t, _, nx, ny, _ = kn.foot_point(pb[0], pb[1], model.geo[kn.G_R], model.geo[kn.G_E], 40.0, al - th[k])
+            ng = np.array([math.cos(al) * nx - math.sin(al) * ny, math.sin(al) * nx + math.cos(al) * ny])
+            F_on_pin = s.pin_force_N[d, k] * ng
+            moment += P[0] * F_on_pin[1] - P[1] * F_on_pin[0]
+    assert abs(moment) == pytest.approx(T * (1 - 1 / model.ratio), rel=2e-3)
+
+
+def test_quasi_static_te_at_constant_load_equals_the_static_solution(model):
+    th = np.linspace(0.0, 40.0, 9)
+    qs = quasi_static(model, th, 200.0)
+    for a, te in zip(th[::4], qs.te_arcsec[::4]):
+        assert solve_static(model, a, 200.0).te_arcsec == pytest.approx(te, abs=1e-6)
+
+
+def test_slow_dynamic_run_follows_the_quasi_static_solution(model):
+    # 60 rpm input (1/20 of paper 001): inertia forces negligible; compare after the load ramp
+    r = simulate(model, LoadSpec("constant", 300.0), duration_s=2.6, input_speed_rpm=60.0, dt_s=2e-4)
+    m = r.t_s >= 2.3
+    qs = quasi_static(model, r.input_angle_deg[m][::10], 300.0)
+    diff = r.te_arcsec[m][::10] - qs.te_arcsec
+    assert np.abs(diff).max() < 0.5      # arcsec, against a mean TE of ~ -130 arcsec
+
+
+def test_eigenfrequency_of_free_vibration_matches_the_eigenvalue_solve(model):
+    from scipy.linalg import eigh
+    s = solve_static(model, 0.0, 412.0)
+    K, M = linearise(model, s)
+    lam, modes = eigh(K, M)
+    f1 = math.sqrt(lam[0]) / (2 * math.pi)
+    # free vibration of the nonlinear model in mode 1 (input held, undamped, trapezoidal rule)
+    n, dt = 4000, 2e-5
+    z = np.zeros(n + 1)
+    q, v = s.q.copy(), 1e-3 * modes[:, 0] / np.abs(modes[0, 0])
+    geo = model.geo.copy()
+    geo[kn.G_BETA] = 0.0
+    out = [np.zeros(n + 1), np.zeros((n + 1, 2), np.int64), np.zeros((1, 2, 40)), np.zeros(n + 1),
+           np.zeros((n + 1, 4))]
+    done, _, status = kn.integrate(q, v, model.mass, z, z, np.full(n + 1, 412.0), dt, 1, 0.0, geo, model.pins,
+                                   model.cranks, model.law, model.disc_rotation, dm._fresh_tws(model), model.scale,
+                                   25, 1e-12, *out, False, np.zeros((3, model.n_dof)))
+    assert status == 0
+    x = out[0] - out[0].mean()
+    spec = np.abs(np.fft.rfft(x * np.hanning(len(x)), 64 * len(x)))
+    f_peak = np.fft.rfftfreq(64 * len(x), dt)[np.argmax(spec)]
+    # trapezoidal period elongation (w dt)^2 / 12 < 1e-4 here; amplitude 1e-3 rad/s keeps it linear
+    assert f_peak == pytest.approx(f1, rel=5e-3)
+    assert 200 < f1 < 2000          # the output torsional mode of a robot-joint reducer
+
+
+def test_halving_the_time_step_changes_sigma_by_less_than_one_percent(model):
+    load = LoadSpec("sine", 300.0)
+    s = [simulate(model, load, duration_s=2.2, dt_s=dt, store_pin_forces=False).std_arcsec(2.0)
+         for dt in (2e-4, 1e-4)]
+    assert abs(s[0] - s[1]) < 0.01 * s[1]
+
+
+def test_energy_balance_of_an_undamped_run(model):
+    r = simulate(model, LoadSpec("sine", 300.0), duration_s=0.25, hht_alpha=0.0, damping_beta_s_=0.0,
+                 return_energy=True)
+    e = r.meta["energy_J"]
+    balance = e[:, 0] + e[:, 1] - e[0, 1] - e[:, 2] - e[:, 3]
+    assert np.abs(balance).max() < 1e-3 * np.abs(e[:, 2]).max()   # trapezoidal rule: O(dt^2) work error
+
+
+def test_backward_run_reports_negative_torque_and_mirrored_windup(model):
+    fw = quasi_static(model, [10.0], 300.0)
+    bw = quasi_static(model, [10.0], 300.0, direction=-1)
+    assert bw.output_torque_Nm[0] == -300.0
+    assert fw.te_arcsec[0] < -60 and bw.te_arcsec[0] > 60     # output lags the motion either way
+
+
+def test_coaxiality_adds_a_once_per_revolution_apparent_error():
+    e_um, r_mm = 20.0, 50.0
+    m = model_for_tests(output_coaxiality_um=e_um, output_coaxiality_phase_deg=0.0)
+    ideal = model_for_tests()
+    th = np.linspace(0, 81 * 360, 73)
+    d = quasi_static(m, th, 100.0).te_arcsec - quasi_static(ideal, th, 100.0).te_arcsec
+    out = np.deg2rad(th / 81)
+    assert np.allclose(d, np.rad2deg(e_um * 1e-3 / r_mm * np.sin(out)) * 3600, atol=0.05)
+
+
+def test_errors_are_input_errors(model):
+    with pytest.raises(DynamicsError, match="direction"):
+        simulate(model, LoadSpec("sine", 1.0), direction=2)
+    with pytest.raises(DynamicsError, match="dt_s"):
+        simulate(model, LoadSpec("sine", 1.0), dt_s=0.01)
+    other = dataclasses.replace(stiffness_for_tests(model.case), case_name="rv160n-81")
+    with pytest.raises(DynamicsError, match="rv160n-81"):
+        build_model(model.case, other)
