@@ -13,6 +13,9 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 def plotter(window_size: tuple[int, int] = (1200, 900)):
     """A PyVista plotter that renders off screen (white background, anti-aliased)."""
     import pyvista as pv
+    from vtkmodules.vtkCommonCore import vtkLogger
+    # VTK tries an X display before falling back to EGL; without a display that try only warns.
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
     pv.OFF_SCREEN = True
     p = pv.Plotter(off_screen=True, window_size=list(window_size))
     p.set_background("white")
