@@ -45,7 +45,10 @@ and pillar contacts not modelled; constant diagonal mass matrix (carrier speed <
 the Coriolis/centripetal terms of the crank translation < 1e-3 of the contact forces).
 Integrator: implicit HHT-alpha (alpha = 0.05) with a full Newton per step (numba kernel) at
 dt = 1e-4 s by default: the contact modes reach ~10 kHz and an explicit scheme would need
-dt < 1e-5 s; the time-step study is in tests/test_dynamics_verification.py.
+dt < 1e-5 s; the time-step study is in tests/test_dynamics_verification.py. Only candidate pins
+(gap < kernels.CANDIDATE_MARGIN_M at the last refresh, every CANDIDATE_REFRESH steps) enter the
+Newton iterations; a skipped pin found closed raises DynamicsError (never silently wrong).
+Statics: `solve_static` (robust strategy and the zero-load convention in its docstring).
 """
 from __future__ import annotations
 
@@ -523,7 +526,7 @@ def simulate(model: ReducerModel, load: LoadSpec, *, duration_s: float = 7.0,
     out_teeth = np.zeros((ns, model.n_disc), np.int64)
     out_pf = np.zeros((ns if store_pin_forces else 1, model.n_disc, zp))
     out_e = np.zeros((ns, 4))
-    done, iters, status = kn.integrate(q, np.zeros_like(q), model.mass, th, w, T, dt, stride, hht_alpha,
+    done, iters, status, missed = kn.integrate(q, np.zeros_like(q), model.mass, th, w, T, dt, stride, hht_alpha,
                                        geo, model.pins, model.cranks, model.law, model.disc_rotation, tws,
                                        model.scale, 40, NEWTON_TOL_M, out_q0, out_teeth, out_pf, out_tau, out_e,
                                        store_pin_forces, np.zeros((3, model.n_dof)))
@@ -531,8 +534,13 @@ def simulate(model: ReducerModel, load: LoadSpec, *, duration_s: float = 7.0,
         why = {1: "Newton did not converge", 3: "contact geometry lost (foot point)"}.get(status, "failed")
         raise DynamicsError(f"simulate diverged at t = {done * dt:.5g} s ({why}) for load {load}, "
                             f"dt = {dt:g} s: reduce --dt or check the stiffness laws")
+    if missed:
+        raise DynamicsError(f"simulate: {missed} pin contacts closed while skipped as open (candidate "
+                            f"margin {kn.CANDIDATE_MARGIN_M * 1e6:g} um too small for load {load}); "
+                            f"reduce --dt")
     idx = np.arange(ns) * stride
     meta = {"load": str(load), "dt_s": dt, "sample_dt_s": dt * stride, "newton_per_step": iters / max(nsteps, 1),
+            "missed_contacts": int(missed),
             "input_speed_rpm": speed, "direction": direction, "solver": f"HHT-alpha {hht_alpha}",
             "damping_beta_s": float(geo[kn.G_BETA]), "input_torque_Nm": out_tau}
     if return_energy:

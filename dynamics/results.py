@@ -47,6 +47,23 @@ class TEResult:
         """Population standard deviation sqrt(sum (x - mean)^2 / n) of TE (paper 001's sigma)."""
         return float(np.std(self.te_arcsec[self.window(t_from_s)]))
 
+    def last_revolution(self) -> np.ndarray:
+        """Mask of the last full output revolution of the run (output travel 360 deg back from
+        the end, either direction): the window paper 001 most likely analysed."""
+        out = self.output_angle_deg
+        travel = np.abs(out - out[-1])
+        if travel.max() < 360.0:
+            raise ResultError(f"last output revolution: the output turned only {travel.max():.4g} deg "
+                              f"(allowed: runs with >= 360 deg of output travel)")
+        first = np.flatnonzero(travel >= 360.0)[-1]
+        mask = np.zeros(len(out), bool)
+        mask[first:] = True
+        return mask
+
+    def std_last_revolution_arcsec(self) -> float:
+        """Population sigma of TE over `last_revolution`."""
+        return float(np.std(self.te_arcsec[self.last_revolution()]))
+
     def spectrum(self, t_from_s: float | None = None, points_per_rev: int = 4096) -> OrderSpectrum:
         """Order spectrum of TE per output revolution (needs one whole output revolution)."""
         m = self.window(t_from_s)

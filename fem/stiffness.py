@@ -149,6 +149,21 @@ def save(model: StiffnessModel, path: str | Path) -> None:
     write_json_atomic(path, model.to_json())
 
 
+def path_for_case(case, path: str | Path | None = None) -> Path:
+    """`path`, or the fem stage's artifact build/<case name>/fem/stiffness.json under the current
+    folder; a missing file names the command that makes it."""
+    path = Path(path) if path else Path("build") / case.name / "fem" / "stiffness.json"
+    if not path.exists():
+        raise StiffnessError(f"--stiffness {path}: not found; run `python -m pipeline fem --case "
+                             f"{case.source or case.name} --out {path.parent}` first (or pass --stiffness PATH)")
+    return path
+
+
+def for_case(case, path: str | Path | None = None) -> StiffnessModel:
+    """The stiffness of a case (see `path_for_case`)."""
+    return load(path_for_case(case, path))
+
+
 def load(path: str | Path) -> StiffnessModel:
     path = Path(path)
     try:
@@ -160,4 +175,5 @@ def load(path: str | Path) -> StiffnessModel:
     return StiffnessModel.from_json(data, str(path))
 
 
-__all__ = ["SCHEMA", "StiffnessModel", "PinContact", "TurningArm", "StiffnessError", "save", "load"]
+__all__ = ["SCHEMA", "StiffnessModel", "PinContact", "TurningArm", "StiffnessError", "save", "load",
+           "for_case", "path_for_case"]

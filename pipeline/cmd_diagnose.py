@@ -6,7 +6,6 @@ with other column names or none; nothing is guessed.
 """
 from __future__ import annotations
 
-from pathlib import Path
 
 from geometry.artifacts import InputError
 
@@ -29,17 +28,13 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from fem.stiffness import load as load_stiffness
+    from fem.stiffness import for_case
     from geometry.params import load_case
     from pipeline.diagnosis.diagnose import diagnose
     from pipeline.diagnosis.report import write_report
     from pipeline.records import parse_column_map, read_record
     case = load_case(args.case)
-    spath = Path(args.stiffness) if args.stiffness else Path("build") / case.name / "fem" / "stiffness.json"
-    if not spath.exists():
-        raise DiagnoseError(f"{spath}: stiffness not found; run `python -m pipeline fem --case {args.case}` "
-                            f"first or pass --stiffness PATH")
-    stiffness = load_stiffness(spath)
+    stiffness = for_case(case, args.stiffness)
     cols = parse_column_map(args.columns) if args.columns else None
     records = [read_record(p, cols, header=not args.no_header) for p in args.measured]
     diag = diagnose(case, stiffness, records, points_per_rev=args.points_per_rev)

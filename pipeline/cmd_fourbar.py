@@ -34,12 +34,8 @@ PAPER_L4_MM = 72.0   # l4 that reproduces paper 000's printed numbers (the paper
 # ---------------------------------------------------------------- shared inputs
 
 def _stiffness(case: ReducerCase, path: str | None):
-    from fem import stiffness
-    p = Path(path) if path else Path("build") / case.name / "fem" / "stiffness.json"
-    if not p.exists():
-        raise InputError(f"--stiffness {p}: not found; run `python -m pipeline fem --case "
-                         f"{case.source or case.name}` first or pass --stiffness PATH")
-    return stiffness.load(p)
+    from fem.stiffness import for_case
+    return for_case(case, path)
 
 
 def _check_range(name: str, value: float, lo: float, hi: float) -> float:
@@ -322,7 +318,6 @@ def _figures(out: Path, dev, singles, pairs, scan) -> None:
     ax[0].legend(fontsize=7)
     save_figure(fig, out / "individual.png")
     for (a, b), sw in pairs.items():
-        import matplotlib.pyplot as plt  # noqa: F401  (render configured the backend)
         fig = figure(figsize=(11, 4.5))[0]
         fig.clf()
         X, Y = np.meshgrid(dev * 1e3, dev * 1e3, indexing="ij")

@@ -41,11 +41,12 @@ def test_cli_writes_exact_keys_and_an_offscreen_page(tmp_path, capsys):
     assert "residual_time.png" in page and (out / "residual_orders.png").stat().st_size > 1000
 
 
-def test_a_missing_stiffness_is_one_clear_line(tmp_path, capsys):
+def test_a_missing_stiffness_is_one_clear_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)   # the default stiffness path is build/<case>/fem/ under the cwd
     rc = main(["diagnose", "--case", str(ROOT / "cases" / "rv40e-81.toml"), "--measured", "x.csv",
                "--out", str(tmp_path)])
     err = capsys.readouterr().err
-    assert rc == 2 and "stiffness not found" in err and err.count("\n") == 1
+    assert rc == 2 and "stiffness.json: not found; run `python -m pipeline fem" in err and err.count("\n") == 1
 
 
 def test_coaxiality_that_closes_a_gap_is_the_1x_amplitude():

@@ -44,13 +44,15 @@ def test_hysteresis_writes_the_catalog_figures(tmp_path, stiffness_file):
     h = json.loads((tmp_path / "hysteresis.json").read_text())
     for key in ("torsional_rigidity_Nm_per_arcmin", "lost_motion_arcmin", "backlash_arcmin"):
         assert h[key] > 0
-    # backlash of the case's modification (dR = -5 um, dRr = +8 um). Closed form with the eccentric
+    # backlash of the case's modification (dR < 0, dRr > 0). Closed form with the eccentric
     # fixed: b0 = (dRr - dR sqrt(1 - K1^2)) / (E zc) per side (geometry/clearance.py, first order).
     # With the INPUT locked the eccentric turns (1 + z1/z2) x the output, so the mismatch to the
     # conjugate motion grows (zc + 1 + z1/z2) / zc times faster: backlash = 2 b0 zc / (zc + 1 + z1/z2)
-    K1 = 1.3 * 40 / 64
-    b0 = (8e-3 + 5e-3 * np.sqrt(1 - K1 ** 2)) / (1.3 * 39)
-    expected = 2 * np.rad2deg(b0) * 60 * 39 / (39 + 1 + 12 / 24)
+    case = load_case(case_path())
+    c, m, s1 = case.cycloid, case.modification, case.stage1
+    K1 = c.eccentricity_mm * c.zp / c.pin_circle_radius_mm
+    b0 = (m.equidistant_mm - m.offset_mm * np.sqrt(1 - K1 ** 2)) / (c.eccentricity_mm * c.zc)
+    expected = 2 * np.rad2deg(b0) * 60 * c.zc / (c.zc + 1 + s1.z1 / s1.z2)
     assert h["backlash_arcmin"] == pytest.approx(expected, rel=5e-3)
     assert h["lost_motion_arcmin"] > h["backlash_arcmin"]
     assert (tmp_path / "hysteresis.csv").exists() and (tmp_path / "hysteresis.png").exists()
@@ -64,4 +66,6 @@ def test_matrix_writes_the_sigma_table_with_twelve_cells(tmp_path, stiffness_fil
     assert rows[0] == ["torque_Nm", "constant", "square", "sine"]
     assert [r[0] for r in rows[1:]] == ["100", "200", "300", "400"]
     assert "14.154" in (tmp_path / "comparison.md").read_text()
+    for name in ("te_std_last_rev.csv", "te_std_whole.csv"):      # the other two sigma windows
+        assert list(csv.reader((tmp_path / name).open()))[0] == rows[0]
     assert len(list(tmp_path.glob("*.npz"))) == 12

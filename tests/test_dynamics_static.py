@@ -1,0 +1,141 @@
+"""Robustness of the static solver (solve_static / quasi_static) on all shipped cases: backward runs,
+crank-eccentricity errors of +-15 um on single cranks, large angle steps, any start angle, zero load
+and 2.5 x rated. Stiffness: tests/support.py stand-in, and the FE stiffness when the FEM stage has
+written build/<case>/fem/stiffness.json (skipped otherwise)."""
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dynamics import kernels as kn
+from dynamics import model as dm
+from dynamics.model import quasi_static, solve_static
+from support import case_path, model_for_tests
+
+CASES = ("rv40e-81", "rv40e-105", "rv160n-81")
+ARCSEC_PER_RAD = 180 / math.pi * 3600
+
+
+@pytest.fixture(scope="module", params=CASES)
+def model(request):
+    return model_for_tests(request.param)
+
+
+def _residual_N(model, s):
+    """Largest static residual (rotations as N m / ROT_SCALE_M) of a returned state."""
+    w = dm._workspace(model)
+    geo = model.geo.copy()
+    geo[kn.G_BETA] = 0.0
+    kn.assemble(s.q, np.zeros_like(s.q), math.radians(s.input_angle_deg), 0.0, geo, model.pins, model.cranks,
+                model.law, model.disc_rotation, dm._fresh_tws(model), False, w["f"], w["K"], w["C"], w["pf"],
+                w["pg"], w["br"], w["mf"])
+    r = w["f"].copy()
+    r[0] -= s.torque_Nm if abs(s.torque_Nm) > 1e-3 else math.copysign(dm.ZERO_LOAD_FRACTION, s.torque_Nm) \
+        * model.case.rated_torque_Nm
+    return np.abs(r / model.scale).max()
+
+
+def _half_backlash_arcsec(case):
+    """Closed form, input locked (tests/test_dynamics_cli.py): b0 = (dRr - dR sqrt(1 - K1^2)) / (E zc)
+    per side with the eccentric fixed, times zc / (zc + 1 + z1/z2) with the eccentric turning."""
+    c, m, s1 = case.cycloid, case.modification, case.stage1
+    K1 = c.eccentricity_mm * c.zp / c.pin_circle_radius_mm
+    b0 = (m.equidistant_mm - m.offset_mm * math.sqrt(1 - K1 ** 2)) / (c.eccentricity_mm * c.zc)
+    return b0 * c.zc / (c.zc + 1 + s1.z1 / s1.z2) * ARCSEC_PER_RAD
+
+
+def test_zero_load_rests_on_the_flank_of_the_direction_of_motion_at_half_the_backlash(model):
+    # zero torque is solved as a vanishing preload (ZERO_LOAD_FRACTION of rated) on the flank of motion:
+    # forward the output lags by half the backlash, backward it leads by as much (first-order closed
+    # form: 0.5 % tolerance, the approach at 1e-5 rated adds < 0.01 arcsec)
+    half = _half_backlash_arcsec(model.case)
+    angles = np.linspace(0.0, 360.0, 7)
+    fw = quasi_static(model, angles, 0.0, direction=+1)
+    bw = quasi_static(model, angles, 0.0, direction=-1)
+    assert np.allclose(fw.te_arcsec, -half, rtol=5e-3)
+    assert np.allclose(bw.te_arcsec, half, rtol=5e-3)
+    assert solve_static(model, 5.0, 0.0, direction=-1).te_arcsec == pytest.approx(bw.te_arcsec[0], abs=0.5)
+
+
+def test_backward_runs_mirror_the_forward_ones_from_4_N_m_to_two_and_a_half_times_rated(model):
+    rated = model.case.rated_torque_Nm
+    angles = np.linspace(0.0, 720.0, 9)
+    for T in (4.0, rated, 2.5 * rated):
+        fw = quasi_static(model, angles, T, direction=+1)
+        bw = quasi_static(model, angles, T, direction=-1)
+        # the ideal mechanism is mirror-symmetric: the mean windups agree (measured < 0.1 %)
+        assert np.mean(bw.te_arcsec) == pytest.approx(-np.mean(fw.te_arcsec), rel=5e-3)
+        assert (bw.te_arcsec > 0).all() and (fw.te_arcsec < 0).all()
+
+
+def test_stiffening_contacts_give_less_than_proportional_windup_at_two_and_a_half_times_rated(model):
+    rated = model.case.rated_torque_Nm
+    half = _half_backlash_arcsec(model.case)
+    s1, s25 = solve_static(model, 7.0, rated), solve_static(model, 7.0, 2.5 * rated)
+    # Hertz laws F = k d^n with n > 1 (and more pins in contact): elastic windup grows less than T
+    e1, e25 = -s1.te_arcsec - half, -s25.te_arcsec - half
+    assert 0 < e25 < 2.5 * e1
+    assert s25.teeth_in_contact.min() >= s1.teeth_in_contact.min()
+    assert s25.input_torque_Nm == pytest.approx(2.5 * rated / model.ratio, rel=2e-3)   # power balance
+
+
+def test_large_angle_steps_and_any_start_angle_give_the_same_equilibria(model):
+    rated = model.case.rated_torque_Nm
+    period = 360.0 * model.ratio                 # the mechanism repeats after one output revolution
+    steps = np.arange(0.0, 4200.0, 700.0)        # 700 deg input: 8.6 eccentric turns at i = 81
+    far = quasi_static(model, steps + 1234 * period, rated, direction=-1)
+    near = quasi_static(model, steps, rated, direction=-1)
+    assert np.allclose(far.te_arcsec, near.te_arcsec, atol=1e-3)
+    for a, te in zip(steps[::2], near.te_arcsec[::2]):
+        s = solve_static(model, a, -rated)
+        assert s.te_arcsec == pytest.approx(te, abs=1e-3)
+        assert _residual_N(model, s) < 1e-3
+
+
+@pytest.mark.parametrize("crank", [0, 1, 2])
+@pytest.mark.parametrize("error_um", [15.0, -15.0])
+def test_single_crank_eccentricity_errors_of_15_um_solve_at_small_and_rated_torque(crank, error_um):
+    ecc = [0.0, 0.0, 0.0]
+    ecc[crank] = error_um
+    for name in ("rv40e-81", "rv160n-81"):
+        m = model_for_tests(name, crank_eccentricity_um=ecc)
+        rated = m.case.rated_torque_Nm
+        for T, direction in ((12.0, -1), (rated, +1)):
+            r = quasi_static(m, np.linspace(0.0, 300.0, 4), T, direction=direction)
+            assert np.all(np.sign(r.te_arcsec) == -direction)
+        s = solve_static(m, 40.0, 12.0)
+        assert _residual_N(m, s) < 1e-3
+
+
+def test_the_fe_stiffness_solves_too_when_the_fem_stage_has_run():
+    from dynamics.model import build_model
+    from fem.stiffness import load
+    from geometry.params import load_case
+    ran = [n for n in CASES if (Path(case_path(n)).parent.parent / "build" / n / "fem" / "stiffness.json").exists()]
+    if not ran:
+        pytest.skip("no build/<case>/fem/stiffness.json yet (python -m pipeline fem)")
+    for name in ran:
+        case = load_case(case_path(name))
+        m = build_model(case, load(Path(case_path(name)).parent.parent / "build" / name / "fem" / "stiffness.json"))
+        rated = case.rated_torque_Nm
+        for T in (0.0, 4.0, rated, 2.5 * rated):
+            for direction in (1, -1):
+                r = quasi_static(m, np.linspace(0.0, 1500.0, 4), T, direction=direction)
+                assert np.all(np.sign(r.te_arcsec) == -direction)
+
+
+def test_the_last_revolution_window_spans_exactly_360_deg_of_output_travel():
+    from dynamics.results import ResultError, TEResult
+    t = np.linspace(0.0, 7.0, 7001)
+    out = 88.888 * np.maximum(t - 0.5, 0.0)         # 577.8 deg of output travel, at rest until 0.5 s
+    te = np.where(out >= out[-1] - 360.0, 1.0, 0.0) + np.sin(t)
+    r = TEResult(t_s=t, input_angle_deg=81 * out, output_angle_deg=out, output_torque_Nm=0 * t,
+                 te_arcsec=te, teeth_in_contact=np.zeros((len(t), 2), int))
+    m = r.last_revolution()
+    assert out[-1] - out[m][0] == pytest.approx(360.0, abs=0.1)      # one sample is 0.089 deg
+    assert r.std_last_revolution_arcsec() == pytest.approx(np.std(te[m]))
+    short = TEResult(t_s=t, input_angle_deg=out, output_angle_deg=out / 2, output_torque_Nm=0 * t,
+                     te_arcsec=te, teeth_in_contact=np.zeros((len(t), 2), int))
+    with pytest.raises(ResultError, match="360"):
+        short.last_revolution()
