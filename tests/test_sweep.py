@@ -1,0 +1,38 @@
+"""Scale-out: the load matrix gives the same table on local processes and on a Dask cluster."""
+import pytest
+
+from fem.stiffness import save
+from geometry.params import load_case
+from pipeline.cli import main
+from pipeline.sweep import chunks, run_tasks
+from tests.support import case_path, stiffness_for_tests
+
+
+def _square(x, y):
+    return x * x + y
+
+
+def test_tasks_come_back_in_order_locally_and_in_one_process():
+    tasks = [(i, 1) for i in range(7)]
+    assert run_tasks(_square, tasks, workers=2) == run_tasks(_square, tasks, workers=1) == \
+        [i * i + 1 for i in range(7)]
+
+
+def test_chunks_cover_every_item_once_in_order():
+    assert chunks(range(10), 3) == [[0, 1, 2, 3], [4, 5, 6], [7, 8, 9]]
+    assert chunks(range(2), 5) == [[0], [1]]
+
+
+def test_the_matrix_on_a_loopback_dask_cluster_equals_the_local_run(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    case = case_path("rv40e-81")
+    stiff = tmp_path / "stiffness.json"
+    save(stiffness_for_tests(load_case(case)), stiff)
+    common = ["matrix", "--case", str(case), "--stiffness", str(stiff), "--duration", "2.2", "--quiet"]
+    assert main([*common, "--out", str(tmp_path / "local")]) == 0
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        assert main([*common, "--out", str(tmp_path / "dask"), "--scheduler", cluster.scheduler_address]) == 0
+    local = (tmp_path / "local" / "te_std.csv").read_text()
+    assert local == (tmp_path / "dask" / "te_std.csv").read_text()
+    assert local.splitlines()[0] == "torque_Nm,constant,square,sine"
