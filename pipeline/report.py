@@ -67,7 +67,10 @@ def _table_from_csv(path: Path, max_rows: int = 40) -> str:
 
 
 def _json_block(path: Path) -> str:
+    """Scalars as a two-column table (numbers to 4 significant figures); nested values below it."""
     data = json.loads(path.read_text())
+    if not isinstance(data, dict):
+        return f"<pre>{html.escape(json.dumps(data, indent=1)[:20000])}</pre>"
 
     def short(v):
         if isinstance(v, list) and len(v) > 12:
@@ -75,7 +78,18 @@ def _json_block(path: Path) -> str:
         if isinstance(v, dict):
             return {k: short(x) for k, x in v.items()}
         return v
-    return f"<pre>{html.escape(json.dumps(short(data), indent=1))}</pre>"
+
+    def fmt(v):
+        return f"{v:.4g}" if isinstance(v, float) else str(v)
+    scalars = {k: v for k, v in data.items() if not isinstance(v, (dict, list))}
+    nested = {k: short(v) for k, v in data.items() if k not in scalars}
+    out = ""
+    if scalars:
+        out += "<table>" + "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(fmt(v))}</td></tr>"
+                                   for k, v in scalars.items()) + "</table>"
+    if nested:
+        out += f"<pre>{html.escape(json.dumps(nested, indent=1))}</pre>"
+    return out
 
 
 def markdown_to_html(text: str) -> str:
