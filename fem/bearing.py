@@ -1,33 +1,171 @@
 """Turning-arm (needle roller) bearing between eccentric and disc crank hole: radial compliance.
 
-Current model (closed form, NOT yet FE): Palmgren's needle approach at the Stribeck load of the
-most loaded needle, delta_r = 3.84e-5 (4.08 F_r / Z)^0.9 / L^0.8 [mm, N, mm], zero clearance
-(fem.hertz). Race bending of the eccentric and of the disc around the crank hole is not included;
-its size is bounded by a Lame thick-cylinder estimate reported beside it (the disc ring between
-crank hole and a radius of twice the hole under the Stribeck pressure band).
-The planned 2D plane-strain FE (eccentric + needles + disc bore with fem.contact) is not done.
+2D plane-strain FE (P1, scikit-fem) of one bearing section, times the needle length:
+  eccentric (inner race): ring from a clamped core of half its radius out to r_e (the shaft core
+      carries the load; its own bending is the crankshaft spring);
+  needles: radius r_n on the pitch circle r_e + r_n, one mesh condensed once (centre as datum,
+      rigid modes only held), rotated to each needle; the cage holds them tangentially, so each
+      has one rigid DOF, its radial shift;
+  disc bore ring: from the crank hole a = r_e + 2 r_n (zero clearance: the clearance is the
+      dynamics stage's gap) out to 2a, clamped there (the rest of the disc is much stiffer).
+The radial load F moves the eccentric core along +x (towards needle 0); contact on every needle
+within +-LOAD_ZONE_DEG of the load line is solved exactly by the condensed active-set solver
+(fem.contact.solve_rigid: frictionless, g >= 0, lambda >= 0, equilibrium of core and needles).
+Needles beyond that zone are unloaded under a zero-clearance translation (their gap opens by
+delta |cos psi|); the model reports the load on its outermost needles so this can be checked.
+Deflection = the core's shift; it contains both Hertz contacts, the needle, race ovalisation of
+the eccentric ring and of the bore ring. Limits: linear elastic, frictionless, no crowning or tilt
+(uniform load along the needle), 2D section.
+References printed beside it (fem.hertz): Palmgren's needle approach at the FE's own most
+loaded needle force, and Stribeck's Q_max = 4.08 F/Z for the load sharing.
 """
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, field
+
 import numpy as np
 
-from fem import hertz
+from fem import contact, elastic, hertz
+from fem.mesh import Mesh2D, annulus_mesh
+from geometry.artifacts import InputError
+
+LOAD_ZONE_DEG = 110.0     # needles modelled: |psi| <= this (loaded zone is +-90 deg at zero clearance)
+LOAD_FRACTIONS = (0.05, 0.1, 0.2, 0.4, 0.7, 1.0)
 
 
-def turning_arm_curve(case, max_load_N: float, n: int = 6) -> dict:
+@dataclass(frozen=True)
+class NeedleBearingFE:
+    load_N: np.ndarray               # (L,) radial loads
+    deflection_m: np.ndarray         # (L,) eccentric-core shift along the load
+    needle_angle_deg: np.ndarray     # (Z',) modelled needles, 0 = load direction
+    needle_load_N: np.ndarray        # (L, Z') radial load of each modelled needle
+    law_k_N_per_m_pow: float
+    law_n: float
+    mesh_size_m: float
+    nodes: int
+    palmgren_deflection_m: np.ndarray   # (L,) Palmgren at the FE's most loaded needle force
+    stribeck_qmax_N: np.ndarray         # (L,) 4.08 F / Z
+    meshes: tuple = field(repr=False, default=())
+
+
+def needle_bearing_fe(radial_loads_N, *, eccentric_radius_m: float, needle_radius_m: float,
+                      needle_count: int, needle_length_m: float, E_Pa: float, nu: float,
+                      mesh_size_m: float | None = None) -> NeedleBearingFE:
+    """Load-deflection of a needle bearing section (see module); one factorization per body."""
+    loads = np.asarray(radial_loads_N, float)
+    re, rn, Z, L = eccentric_radius_m, needle_radius_m, int(needle_count), needle_length_m
+    for name, v in (("eccentric radius", re), ("needle radius", rn), ("needle length", L)):
+        if not (v > 0):
+            raise InputError(f"needle bearing {name} = {v!r}: must be positive")
+    if Z < 4 or Z * 2 * rn > 2 * math.pi * (re + rn):
+        raise InputError(f"needle bearing needle_count = {Z}: allowed 4..{int(math.pi * (re + rn) / rn)}")
+    if loads.size == 0 or np.any(loads <= 0):
+        raise InputError(f"needle bearing loads = {loads.tolist()}: must be positive")
+    from fem.pin_contact import GROWTH, CircleBody
+    a, rp = re + 2 * rn, re + rn
+    Es = hertz.contact_modulus(E_Pa, nu)
+    q_hi = 4.08 * loads.max() / Z * 1.3        # margin over Stribeck for the race compliance
+    b_max = float(hertz.hertz_line(q_hi, L, hertz.effective_radius(rn, -a), Es)[1])
+    b_min = float(hertz.hertz_line(4.08 * loads.min() / Z, L, hertz.effective_radius(rn, re), Es)[1])
+    h = mesh_size_m or b_max / 10
+    if not (0 < h < b_max):
+        raise InputError(f"mesh size = {h * 1e3:g} mm: must be below the largest Hertz half-width "
+                         f"{b_max * 1e3:.3g} mm")
+    window = 1.5 * b_max
+    psi = 2 * np.pi * np.arange(Z) / Z
+    psi = (psi + np.pi) % (2 * np.pi) - np.pi
+    psi = np.sort(psi[np.abs(psi) <= math.radians(LOAD_ZONE_DEG) + 1e-9])
+    h_ring = min(re / 8, 0.5e-3)
+    ecc = annulus_mesh(re / 2, re, psi, h, h_ring, GROWTH, graded_side="outer")
+    bore = annulus_mesh(a, 2 * a, psi, h, h_ring, GROWTH, graded_side="inner")
+    needle = CircleBody.build(rn, h, rn / 4, E_Pa, nu, window, two_sided=True)
+
+    def candidates(mesh, side, radius):
+        nodes = mesh.boundary[side]
+        th = np.arctan2(mesh.points[nodes, 1], mesh.points[nodes, 0])
+        return [nodes[np.abs((th - p + np.pi) % (2 * np.pi) - np.pi) * radius <= window] for p in psi]
+
+    inner, outer = candidates(ecc, "outer", re), candidates(bore, "inner", a)
+    rows, blocks = [], []
+    S_cols = []
+    g0 = []
+    for j, p in enumerate(psi):
+        e_j = np.array([math.cos(p), math.sin(p)])
+        c_j = rp * e_j
+        block = []
+        for side, mesh, nodes in (("in", ecc, inner[j]), ("out", bore, outer[j])):
+            d = c_j - mesh.points[nodes]
+            dist = np.hypot(d[:, 0], d[:, 1])
+            n = d / dist[:, None]
+            g0.append(dist - rn)
+            block.append(n)
+            rows.append((side, j, nodes, n))
+        blocks.append(np.vstack(block))
+    m = sum(len(r[2]) for r in rows)
+    # condensed compliance: eccentric (inner rows), bore (outer rows), each needle (its rows)
+    C = np.zeros((m, m))
+    S = np.zeros((m, 1 + len(psi)))
+    offs = np.cumsum([0] + [len(r[2]) for r in rows])
+    for body, side in ((ecc, "in"), (bore, "out")):
+        fixed_side = "inner" if side == "in" else "outer"
+        K = elastic.stiffness(elastic.basis_2d(body), E_Pa, nu)
+        fx = body.boundary[fixed_side]
+        fac = elastic.Factorized.of(K, np.concatenate([2 * fx, 2 * fx + 1]))
+        idx = np.concatenate([np.arange(offs[i], offs[i + 1]) for i, r in enumerate(rows) if r[0] == side])
+        sel = [r for r in rows if r[0] == side]
+        B = contact.node_operator(np.concatenate([r[2] for r in sel]), -np.vstack([r[3] for r in sel]),
+                                  fac.n_dofs)
+        C[np.ix_(idx, idx)] += fac.compliance(B)
+    for j, p in enumerate(psi):
+        idx = np.arange(offs[2 * j], offs[2 * j + 2])
+        C[np.ix_(idx, idx)] += needle.compliance(blocks[j], p - math.pi / 2)
+        e_j = np.array([math.cos(p), math.sin(p)])
+        S[idx, 1 + j] = -blocks[j] @ e_j
+        S[offs[2 * j]:offs[2 * j + 1], 0] = blocks[j][:offs[2 * j + 1] - offs[2 * j], 0]
+    g0 = np.concatenate(g0)
+    j0 = int(np.argmin(np.abs(psi)))
+    start = [offs[2 * j0] + int(np.argmin(g0[offs[2 * j0]:offs[2 * j0 + 1]])),
+             offs[2 * j0 + 1] + int(np.argmin(g0[offs[2 * j0 + 1]:offs[2 * j0 + 2]]))]
+    defl, qn = np.zeros(len(loads)), np.zeros((len(loads), len(psi)))
+    for il, F in enumerate(loads):
+        f = np.zeros(1 + len(psi))
+        f[0] = F / L
+        lam, q, _ = contact.solve_rigid(C, g0, S, f, start)
+        start = np.flatnonzero(lam > 0)          # warm start of the next (larger) load
+        for i, r in enumerate(rows):
+            if lam[offs[i]] > 0 or lam[offs[i + 1] - 1] > 0:
+                raise InputError(f"needle bearing load {F:g} N: contact reaches the end of the candidate "
+                                 f"zone at needle {math.degrees(psi[r[1]]):.0f} deg")
+            if r[0] == "in":
+                qn[il, r[1]] = -S[offs[i]:offs[i + 1], 1 + r[1]] @ lam[offs[i]:offs[i + 1]] * L
+        defl[il] = q[0]
+    k, n = hertz.fit_power_law(loads, defl)
+    return NeedleBearingFE(loads, defl, np.degrees(psi), qn, k, n, h,
+                           len(ecc.points) + len(bore.points) + len(needle.mesh.points),
+                           hertz.palmgren_needle_approach(qn.max(axis=1), L), 4.08 * loads / Z,
+                           (ecc, bore, needle.mesh))
+
+
+def turning_arm_curve(case, max_load_N: float, *, mesh_size_m: float | None = None) -> dict:
+    """The case's turning-arm bearing swept up to max_load_N (LOAD_FRACTIONS of it)."""
     k = case.crankshaft
     E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
-    loads = max_load_N * np.array([0.05, 0.1, 0.2, 0.4, 0.7, 1.0])[:n]
-    L = k.needle_length_mm * 1e-3
-    d = hertz.needle_bearing_deflection(loads, k.needle_count, L)
-    kk, nn = hertz.fit_power_law(loads, d)
+    loads = max_load_N * np.asarray(LOAD_FRACTIONS)
+    r = needle_bearing_fe(loads, eccentric_radius_m=k.eccentric_radius_mm * 1e-3,
+                          needle_radius_m=k.needle_diameter_mm / 2 * 1e-3, needle_count=k.needle_count,
+                          needle_length_m=k.needle_length_mm * 1e-3, E_Pa=E, nu=nu, mesh_size_m=mesh_size_m)
     a = case.disc.crank_hole_radius_mm * 1e-3
     # Lame: the loaded half of the bore carries F over a projected area 2 a L -> p ~ F / (2 a L)
-    p = max_load_N / (2 * a * L)
+    p = max_load_N / (2 * a * k.needle_length_mm * 1e-3)
     lame = float(hertz.lame_radial_displacement(a, a, 2 * a, p, 0.0, E, nu))
-    return {"load_N": loads, "deflection_m": d, "law_k_N_per_m_pow": kk, "law_n": nn,
-            "lame_ring_deflection_at_max_m": lame,
-            "source": "Palmgren needle approach at Stribeck Q_max = 4.08 F_r/Z (closed form; FE not done)"}
+    return {"load_N": r.load_N, "deflection_m": r.deflection_m, "law_k_N_per_m_pow": r.law_k_N_per_m_pow,
+            "law_n": r.law_n, "lame_ring_deflection_at_max_m": lame,
+            "palmgren_deflection_m": r.palmgren_deflection_m, "fe_qmax_N": r.needle_load_N.max(axis=1),
+            "stribeck_qmax_N": r.stribeck_qmax_N, "mesh_size_m": r.mesh_size_m, "result": r,
+            "source": "2D plane-strain FE (P1, scikit-fem) of eccentric ring (core clamped at r_e/2) + "
+                      "caged needles + disc bore ring (clamped at twice the bore), zero clearance, "
+                      "condensed frictionless contact (fem.contact.solve_rigid), times the needle length"}
 
 
 def turning_arm_max_load(case, torque_Nm: float) -> float:

@@ -102,33 +102,65 @@ def tributary_lengths(points: np.ndarray) -> np.ndarray:
 
 def solve_force(setup: ContactSetup, force_per_m: float, *, max_iter: int = 500) -> tuple:
     """Active-set solution of the force-controlled LCP; returns (lambda [N/m], delta [m], its)."""
-    C, g0, s = setup.compliance_m_per_N, setup.gap0_m, setup.direction
     if force_per_m <= 0:
         raise ContactError(f"contact load = {force_per_m:g} N/m: must be positive")
+    s = setup.direction
     if np.all(s <= 0):
         raise ContactError("no candidate node faces the load direction")
-    m = len(g0)
+    first = int(np.argmin(np.where(s > 0, setup.gap0_m, np.inf)))
+    lam, q, its = solve_rigid(setup.compliance_m_per_N, setup.gap0_m, s[:, None],
+                              np.array([force_per_m]), [first], max_iter=max_iter)
+    return lam, float(q[0]), its
+
+
+def solve_rigid(C: np.ndarray, g0: np.ndarray, S: np.ndarray, f: np.ndarray, active0,
+                *, max_iter: int = 500) -> tuple:
+    """Frictionless contact with r rigid-body DOFs q (a pin's approach, an eccentric's shift,
+    caged needles' radial shifts): find lambda >= 0 (m,) and q (r,) with
+        g = g0 - S q + C lambda >= 0,   g . lambda = 0,   S^T lambda = f (equilibrium of each DOF).
+    Primal-dual active set from the rows active0. A DOF with no load and no active row (a needle
+    out of the load zone) is free: it is centred between its nearest constraints, zero force.
+    Returns (lambda, q, iterations)."""
+    m, r = S.shape
+    f = np.asarray(f, float)
     active = np.zeros(m, bool)
-    active[np.argmin(np.where(s > 0, g0, np.inf))] = True
+    active[np.asarray(active0, int)] = True
+    touches = S != 0
     tol = 1e-14 + 1e-9 * float(np.max(np.abs(g0)))
-    lam = np.zeros(m)
-    delta = 0.0
+    lam, q = np.zeros(m), np.zeros(r)
     seen = set()
     for it in range(1, max_iter + 1):
         A = np.flatnonzero(active)
-        M = np.zeros((len(A) + 1, len(A) + 1))
-        M[:-1, :-1] = C[np.ix_(A, A)]
-        M[:-1, -1] = -s[A]
-        M[-1, :-1] = s[A]
-        rhs = np.concatenate([-g0[A], [force_per_m]])
-        sol = np.linalg.solve(M, rhs)
+        used = touches[A].any(axis=0)
+        if np.any(~used & (f != 0)):   # a loaded DOF needs a contact: take its closest row
+            j = int(np.flatnonzero(~used & (f != 0))[0])
+            rows = np.flatnonzero(touches[:, j] & ~active)
+            active[rows[np.argmin((g0 - S @ q + C @ lam)[rows])]] = True
+            continue
+        k = np.flatnonzero(used)
+        nA = len(A)
+        M = np.zeros((nA + len(k), nA + len(k)))
+        M[:nA, :nA] = C[np.ix_(A, A)]
+        M[:nA, nA:] = -S[np.ix_(A, k)]
+        M[nA:, :nA] = S[np.ix_(A, k)].T
+        sol = np.linalg.solve(M, np.concatenate([-g0[A], f[k]]))
         lam = np.zeros(m)
-        lam[A], delta = sol[:-1], sol[-1]
-        gap = g0 - delta * s + C @ lam
+        lam[A] = sol[:nA]
+        q = np.zeros(r)
+        q[k] = sol[nA:]
+        base = g0 + C @ lam
+        for j in np.flatnonzero(~used):       # free DOFs: midway between their two sides
+            rows = np.flatnonzero(touches[:, j])
+            part = base[rows] - S[rows] @ q
+            sj = S[rows, j]
+            hi = (part[sj > 0] / sj[sj > 0]).min() if np.any(sj > 0) else None
+            lo = (part[sj < 0] / sj[sj < 0]).max() if np.any(sj < 0) else None
+            q[j] = 0.5 * (hi + lo) if hi is not None and lo is not None else (hi if lo is None else lo)
+        gap = base - S @ q
         neg = A[lam[A] < 0]
         pen = np.flatnonzero(~active & (gap < -tol))
         if not len(neg) and not len(pen):
-            return lam, float(delta), it
+            return lam, q, it
         key = active.tobytes()
         if key in seen:            # a cycle of the block update: fall back to one change per step
             if len(neg):
@@ -142,7 +174,7 @@ def solve_force(setup: ContactSetup, force_per_m: float, *, max_iter: int = 500)
         if not active.any():
             active[np.argmin(gap)] = True
     raise ContactError(f"contact active set did not converge in {max_iter} iterations "
-                       f"(load {force_per_m:g} N/m): enlarge the candidate zone or refine the mesh")
+                       f"(loads {f.tolist()}): enlarge the candidate zone or refine the mesh")
 
 
 def half_width(coord: np.ndarray, pressure: np.ndarray, active: np.ndarray) -> float:

@@ -14,6 +14,10 @@ Lengths are metres in every mesh; boundary node sets are named and ordered along
 """
 from __future__ import annotations
 
+import contextlib
+import os
+import tempfile
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -141,15 +145,17 @@ def _circle(radius: float) -> Callable:
 
 
 def pin_mesh(radius_m: float, h_min: float, h_max: float, growth: float = 0.08,
-             contact_angle_rad: float = -np.pi / 2) -> Mesh2D:
-    """A full circle (pin, roller, needle) graded toward the boundary point at contact_angle.
+             contact_angle_rad: float = -np.pi / 2, *, opposite: bool = False) -> Mesh2D:
+    """A full circle (pin, roller, needle) graded toward the boundary point at contact_angle
+    (and the diametrically opposite point too when `opposite`: a needle between two races).
     Boundary sets: 'surface' (all, counter-clockwise from the contact point), 'back' (the half
     facing away from the contact), 'contact_arc' (the half facing it)."""
     a0 = contact_angle_rad
-    t = graded_parameters(_circle(radius_m), a0, a0 + 2 * np.pi, [a0, a0 + 2 * np.pi],
-                          h_min, h_max, growth)[:-1]
+    foci = [a0, a0 + np.pi, a0 + 2 * np.pi] if opposite else [a0, a0 + 2 * np.pi]
+    t = graded_parameters(_circle(radius_m), a0, a0 + 2 * np.pi, foci, h_min, h_max, growth)[:-1]
     loop = _circle(radius_m)(t)
-    p, tri = triangulate(loop, h_max, size=_focus_size(loop[:1], h_min, h_max, growth))
+    focus_xy = _circle(radius_m)(np.array(foci[:-1]))
+    p, tri = triangulate(loop, h_max, size=_focus_size(focus_xy, h_min, h_max, growth))
     rel = (t - a0 + np.pi) % (2 * np.pi) - np.pi
     idx = np.arange(len(t))
     return Mesh2D(p, tri, {"surface": idx, "back": idx[np.abs(rel) >= np.pi / 2],
@@ -239,8 +245,25 @@ def annulus_mesh(inner_radius_m: float, outer_radius_m: float, focus_angles_rad,
                            "inner": np.arange(len(outer), len(outer) + len(inner))})
 
 
+_CWD_LOCK = threading.Lock()   # the working directory is process-wide: one scratch user at a time
+
+
+@contextlib.contextmanager
+def _scratch_cwd():
+    """Run a block inside a fresh temporary directory (fTetWild writes `__tracked_surface.stl`
+    into the current directory); the previous cwd is restored and the scratch removed."""
+    with _CWD_LOCK, tempfile.TemporaryDirectory(prefix="rvte-tetwild-") as tmp:
+        old = os.getcwd()
+        os.chdir(tmp)
+        try:
+            yield
+        finally:
+            os.chdir(old)
+
+
 def tet_mesh_from_solid(solid, edge_length_m: float, *, tolerance_m: float | None = None) -> Mesh3D:
-    """Tetrahedra (pytetwild) of a CadQuery solid/Workplane given in millimetres; output in metres."""
+    """Tetrahedra (pytetwild) of a CadQuery solid/Workplane given in millimetres; output in metres.
+    fTetWild runs in a scratch directory, so nothing is left in the caller's folder."""
     import pytetwild
     shape = solid.val() if hasattr(solid, "val") else solid
     tol = (tolerance_m or edge_length_m / 20) * 1e3
@@ -248,8 +271,9 @@ def tet_mesh_from_solid(solid, edge_length_m: float, *, tolerance_m: float | Non
     v = np.array([(p.x, p.y, p.z) for p in verts], dtype=float)
     f = np.array(faces, dtype=np.int32)
     bbox = float(np.linalg.norm(v.max(0) - v.min(0)))
-    p, t = pytetwild.tetrahedralize(v, f, edge_length_abs=edge_length_m * 1e3,
-                                    epsilon=min(1e-3, tol / bbox), quiet=True)
+    with _scratch_cwd():
+        p, t = pytetwild.tetrahedralize(v, f, edge_length_abs=edge_length_m * 1e3,
+                                        epsilon=min(1e-3, tol / bbox), quiet=True)
     if len(t) == 0:
         raise MeshError("pytetwild produced no tetrahedra (open or degenerate solid)")
     p = np.asarray(p, float) * 1e-3

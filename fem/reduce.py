@@ -1,7 +1,7 @@
 """Reduce every FE/closed-form result of the FEM stage to the stiffness.json schema.
 
 build_stiffness(case, mesh_size_m=...) runs: the 2D tooth-pin contact map (fem.pin_contact),
-the 3D crankshaft (fem.shaft), the turning-arm bearing (fem.bearing), the involute mesh
+the 3D crankshaft (fem.shaft), the turning-arm bearing (2D FE, fem.bearing), the involute mesh
 (fem.involute), and returns a StiffnessModel plus the fields the pictures need.
 Crankshaft bending is the shaft alone, simply supported at the bearing centres; the support
 bearings are the separate `support_bearing` spring (in series; extras give the combined figure).
@@ -31,7 +31,7 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
     t1 = time.perf_counter()
     cs, fields = shaft.crankshaft_stiffness(case, crank_edge_m)
     t2 = time.perf_counter()
-    beam = shaft.crankshaft_beam_estimate(case)
+    beam = shaft.crankshaft_beam_reference(case)
     ta = bearing.turning_arm_curve(case, bearing.turning_arm_max_load(case, 2.5 * case.rated_torque_Nm))
     inv = involute.mesh_stiffness(case)
     ksb = case.crankshaft.support_bearing_stiffness_N_per_um * 1e6
@@ -73,6 +73,10 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
             "crankshaft_edge_length_m": cs.edge_length_m,
             "involute_single_pair_stiffness_N_per_m": inv["single_pair_stiffness_N_per_m"],
             "turning_arm_lame_ring_deflection_at_max_m": ta["lame_ring_deflection_at_max_m"],
+            "turning_arm_palmgren_deflection_m": ta["palmgren_deflection_m"].tolist(),
+            "turning_arm_fe_qmax_N": ta["fe_qmax_N"].tolist(),
+            "turning_arm_stribeck_qmax_N": ta["stribeck_qmax_N"].tolist(),
+            "turning_arm_mesh_size_m": ta["mesh_size_m"],
             "timing_s": dict(tm.timing_s, crankshaft_s=t2 - t1, total_s=time.perf_counter() - t0),
         })
     model.check(case.name)

@@ -1,13 +1,12 @@
 """3D crankshaft bending and torsion (P2 tetrahedra from pytetwild, scikit-fem), and the
 plain-shaft verification against beam theory.
 
-Crankshaft model (own stepped solid until geometry.solids exists): planet seat (journal radius,
-one journal length) | journal 1 centred at z = 0 | shaft at journal radius | eccentric 1 and
-eccentric 2 (eccentric radius, one disc width each, offsets +e and -e along x) centred about
-span/2 | shaft | journal 2 centred at z = span.
-Supports: the support bearings act as pins: the lateral DOFs of the journal-surface nodes in a
-band of one element at each bearing centre are held (axial DOF held at bearing 1 only), so the
-shaft is simply supported at the bearing centres (the bearings' own compliance is the separate
+Crankshaft model: the project's solid, geometry.solids.crankshaft_solid(case), with its
+zones from crankshaft_layout(case): planet seat | journal 1 centred at z = 0 | core at journal
+radius | eccentric 1 (+x) | eccentric 2 (-x) | core | journal 2 centred at z = span.
+Supports: the support bearings act as pins: the MEAN lateral displacement of the journal-surface
+nodes in a band of about one element at each bearing centre is held (plus mean axial and mean
+tangential at bearing 1), so the shaft is simply supported at the bearing centres (the bearings' own compliance is the separate
 support_bearing spring). Loads are uniform tractions (resultants F or T) on the eccentric's
 cylindrical surface or the planet-seat end face; deflections are averages over the loaded
 region (the lumped model's node), rotations least-squares over the section.
@@ -19,8 +18,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
-from fem import elastic
+from fem import elastic, hertz
 from fem.mesh import Mesh3D, tet_mesh_from_solid
 
 
@@ -115,30 +115,18 @@ def _cantilever(m3: Mesh3D, radius_m, length_m, E, nu, F, T) -> dict:
     return {"tip_deflection_m": ux_mean, "twist_rad": rot, "dofs": int(K.shape[0]), "tip_J_m4": J}
 
 
-def crankshaft_solid(case):
-    """Own stepped crankshaft (mm, z along the axis, z = 0 at the first support-bearing centre)."""
-    import cadquery as cq
-    k, c = case.crankshaft, case.cycloid
-    rj, re, Lj, span, w, e = (k.journal_radius_mm, k.eccentric_radius_mm, k.journal_length_mm,
-                              k.support_span_mm, c.width_mm, c.eccentricity_mm)
-    z0 = -Lj / 2 - Lj                                # planet seat starts here
-    body = cq.Workplane("XY").workplane(offset=z0).circle(rj).extrude(span + Lj / 2 - z0)
-    for sign, zc in ((+1, span / 2 - w / 2), (-1, span / 2 + w / 2)):
-        ecc = cq.Workplane("XY").workplane(offset=zc - w / 2).center(sign * e, 0).circle(re).extrude(w)
-        body = body.union(ecc)
-    return body, {"planet_seat_z_mm": (z0, -Lj / 2), "journals_z_mm": ((-Lj / 2, Lj / 2), (span - Lj / 2, span + Lj / 2)),
-                  "eccentrics_z_mm": ((span / 2 - w, span / 2), (span / 2, span / 2 + w))}
-
-
-def crankshaft_stiffness(case, edge_length_m: float | None = None) -> tuple[ShaftResult, dict]:
+def crankshaft_stiffness(case, edge_length_m: float | None = None, *,
+                         mesh3: Mesh3D | None = None) -> tuple[ShaftResult, dict]:
     """Lateral stiffness at eccentric 1 (force along x, shaft pinned at the bearing centres) and
-    torsional stiffness from the planet-seat end face to eccentric 1 (eccentric surface held)."""
+    torsional stiffness from the planet-seat end face to eccentric 1 (eccentric surface held).
+    mesh3: a tet mesh of crankshaft_solid(case) made beforehand (the mesh stage), else meshed here."""
     from skfem import MeshTet  # noqa: F401
+    from geometry.solids import crankshaft_layout, crankshaft_solid
     k, c = case.crankshaft, case.cycloid
     E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
-    solid, zones = crankshaft_solid(case)
+    lay = crankshaft_layout(case)
     h = edge_length_m or k.journal_radius_mm * 1e-3 / 2.5
-    m3 = tet_mesh_from_solid(solid, h)
+    m3 = mesh3 if mesh3 is not None else tet_mesh_from_solid(crankshaft_solid(case), h)
     basis = elastic.basis_3d(m3, order=2)
     mesh = basis.mesh
     K = elastic.stiffness(basis, E, nu)
@@ -148,24 +136,40 @@ def crankshaft_stiffness(case, edge_length_m: float | None = None) -> tuple[Shaf
     on_journal = lambda x: np.abs(np.hypot(x[0], x[1]) - rj) < 0.03 * rj  # noqa: E731
     d1 = basis.get_dofs(lambda x: on_journal(x) & (np.abs(x[2]) < band))
     d2 = basis.get_dofs(lambda x: on_journal(x) & (np.abs(x[2] - span) < band))
-    fixed = np.concatenate([d1.nodal["u^1"], d1.nodal["u^2"], d1.nodal["u^3"],
-                            d2.nodal["u^1"], d2.nodal["u^2"]])
     for d in (d1, d2):
         if len(d.nodal["u^1"]) < 3:
             raise RuntimeError("support band caught too few nodes: refine the crankshaft mesh")
-    fac = elastic.Factorized.of(K, fixed)
-    ez0, ez1 = (z * 1e-3 for z in zones["eccentrics_z_mm"][0])
-    ecc_surf = mesh.facets_satisfying(lambda x: (np.abs(np.hypot(x[0] - e, x[1]) - re) < 0.03 * re)
+    # pins, not clamps: holding every band node would also hold the slope (a clamp, measured 1.7x
+    # stiffer). Instead the band's MEAN lateral displacement is zero (Lagrange multipliers), plus
+    # mean axial and mean tangential at bearing 1: the six rigid modes, no moment restraint.
+    xyz = basis.doflocs
+    rows = []
+    for d, comps in ((d1, ("u^1", "u^2", "u^3", "rot")), (d2, ("u^1", "u^2"))):
+        ix, iy = d.nodal["u^1"], d.nodal["u^2"]
+        for comp in comps:
+            if comp == "rot":
+                r = np.hypot(xyz[0, ix], xyz[1, ix])
+                rows.append((np.concatenate([ix, iy]), np.concatenate([-xyz[1, ix] / r, xyz[0, ix] / r]) / len(ix)))
+            else:
+                rows.append((d.nodal[comp], np.full(len(d.nodal[comp]), 1.0 / len(d.nodal[comp]))))
+    n = K.shape[0]
+    Cm = sp.csr_matrix((np.concatenate([w for _, w in rows]),
+                        (np.repeat(np.arange(len(rows)), [len(c) for c, _ in rows]),
+                         np.concatenate([c for c, _ in rows]))), shape=(len(rows), n))
+    fac = elastic.Factorized.of(sp.bmat([[K, Cm.T], [Cm, None]]).tocsr(), np.array([], int))
+    ez0, ez1 = (z * 1e-3 for z in lay.eccentrics_mm[0])
+    ex, ey = (v * 1e-3 for v in lay.eccentric_centre_mm(0))
+    ecc_surf = mesh.facets_satisfying(lambda x: (np.abs(np.hypot(x[0] - ex, x[1] - ey) - re) < 0.03 * re)
                                       & (x[2] > ez0 - 1e-9) & (x[2] < ez1 + 1e-9))
     area = _area(mesh, ecc_surf, basis.elem)
     F = 1000.0
     f, _ = _traction(None, mesh, ecc_surf, basis.elem, lambda x: np.array([0 * x[0] + F / area, 0 * x[0], 0 * x[0]]))
-    u = fac.solve(f)
+    u = fac.solve(np.concatenate([f, np.zeros(len(rows))]))[:n]
     de = basis.get_dofs(ecc_surf)
     kb = F / float(u[de.nodal["u^1"]].mean())
     # torsion: eccentric 1 surface held, torque on the planet-seat end face
     fac_t = elastic.Factorized.of(K, np.concatenate([de.nodal["u^1"], de.nodal["u^2"], de.nodal["u^3"]]))
-    zs = zones["planet_seat_z_mm"][0] * 1e-3
+    zs = lay.planet_seat_mm[0] * 1e-3
     face = mesh.facets_satisfying(lambda x: x[2] < zs + 1e-3 * span)
     T = 10.0
     J = _polar_moment(mesh, face, basis.elem)
@@ -180,18 +184,32 @@ def crankshaft_stiffness(case, edge_length_m: float | None = None) -> tuple[Shaf
     return result, pictures
 
 
-def crankshaft_beam_estimate(case) -> dict:
-    """Beam-theory figures of the same stepped shaft for a sanity band: simply supported span,
-    load at the eccentric centre, journal-radius section (lower bound of the stiffness), and
-    the twist of a journal-radius shaft from the planet-seat face to the eccentric."""
-    from fem import hertz
-    k, c = case.crankshaft, case.cycloid
+def crankshaft_beam_reference(case, n: int = 20001) -> dict:
+    """Stepped-beam closed form of the FE's two load cases, on the layout's actual sections.
+    Bending: simply supported at the bearing centres, the FE's uniform load F over eccentric 1;
+    by unit-load (virtual work with the same distributed load, i.e. the load-averaged deflection
+    the FE reports) delta = int M^2/(E I(z) F) + V^2/(kappa G A(z) F) dz, each section a circle
+    about its own centroid (journal radius in the core, eccentric radius over the eccentrics).
+    Torsion: T L / (G J) of the journal-radius shaft from the planet-seat face to eccentric 1.
+    Limits: plane sections; the steps' local flexibility and 3D load spreading are not included."""
+    from geometry.solids import crankshaft_layout
+    lay = crankshaft_layout(case)
     E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
-    L = k.support_span_mm * 1e-3
-    a = (k.support_span_mm / 2 - c.width_mm / 2) * 1e-3
-    b = L - a
-    I, J = hertz.circle_inertia(k.journal_radius_mm * 1e-3)
-    defl = a * a * b * b / (3 * E * I * L)            # per newton, load at a from one support
-    G = E / (2 * (1 + nu))
-    length_t = (1.5 * k.journal_length_mm + a * 1e3) * 1e-3
-    return {"bending_stiffness_N_per_m": 1 / defl, "torsional_stiffness_Nm_per_rad": G * J / length_t}
+    G, kappa = E / (2 * (1 + nu)), hertz.timoshenko_shear_coefficient(nu)
+    span = lay.support_span_mm * 1e-3
+    z = np.linspace(0.0, span, n)
+    r = np.full(n, lay.journal_radius_mm * 1e-3)
+    for a, b in lay.eccentrics_mm:
+        r[(z >= a * 1e-3) & (z <= b * 1e-3)] = lay.eccentric_radius_mm * 1e-3
+    I, A = np.pi * r ** 4 / 4, np.pi * r ** 2
+    c, d = (v * 1e-3 for v in lay.eccentrics_mm[0])
+    F, q = 1.0, 1.0 / (d - c)
+    R1 = F * (span - 0.5 * (c + d)) / span
+    load_left = q * np.clip(z - c, 0.0, d - c)                        # load to the left of z
+    V = R1 - load_left
+    M = R1 * z - load_left * (z - 0.5 * (c + np.clip(z, c, d)))
+    defl = np.trapezoid(M ** 2 / (E * I) + V ** 2 / (kappa * G * A), z) / F
+    _, J = hertz.circle_inertia(lay.journal_radius_mm * 1e-3)
+    length_t = (lay.eccentrics_mm[0][0] - lay.planet_seat_mm[0]) * 1e-3
+    return {"bending_stiffness_N_per_m": 1 / defl, "torsional_stiffness_Nm_per_rad": G * J / length_t,
+            "method": "stepped Timoshenko beam by unit-load integration over the layout's sections"}
