@@ -4,7 +4,7 @@
 #   make test                         the test suite (what CI runs)
 #   make bench                        benchmarks -> $(BUILD)/bench.json
 # `all`, `test` and `bench` create .venv and install the pinned dependencies when missing.
-# Stage graph per case:  geometry -> fem -> {matrix, hysteresis, fourbar, tolerance, diagnosis} -> report
+# Stage graph per case:  geometry -> mesh -> fem -> {matrix, hysteresis, fourbar, tolerance, diagnosis} -> report
 
 PYTHON ?= python3
 VENV := .venv
@@ -24,7 +24,7 @@ SCHED := $(if $(SCHEDULER),--scheduler $(SCHEDULER),)
 export MPLBACKEND := Agg
 export PYVISTA_OFF_SCREEN := true
 
-.PHONY: all test bench clean install report $(addprefix stage-,geometry fem matrix hysteresis fourbar tolerance diagnosis)
+.PHONY: all test bench clean install report $(addprefix stage-,geometry mesh fem matrix hysteresis fourbar tolerance diagnosis)
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -40,6 +40,7 @@ $(STAMP): pyproject.toml
 
 # Sources each stage depends on (a change in a stage's code reruns it and what follows).
 SRC_geometry := $(wildcard geometry/*.py pipeline/cmd_geometry.py)
+SRC_mesh := $(SRC_geometry) $(wildcard fem/mesh.py fem/shaft.py pipeline/cmd_fem.py)
 SRC_fem := $(SRC_geometry) $(wildcard fem/*.py pipeline/cmd_fem.py)
 SRC_dynamics := $(wildcard dynamics/*.py pipeline/cmd_dynamics.py pipeline/sweep.py)
 SRC_fourbar := $(wildcard dynamics/fourbar.py dynamics/tolerance.py pipeline/cmd_fourbar.py pipeline/sweep.py)
@@ -49,9 +50,14 @@ stage-geometry: $(foreach c,$(CASES),$(BUILD)/$(c)/geometry/profile.csv)
 $(BUILD)/%/geometry/profile.csv: cases/%.toml $(SRC_geometry) | $(STAMP)
 	$(RUN) geometry --case $< --out $(BUILD)/$*/geometry $(Q)
 
+# The crankshaft tet mesh is made once (fTetWild is not run-to-run reproducible) and reused.
+stage-mesh: $(foreach c,$(CASES),$(BUILD)/$(c)/mesh/crankshaft_mesh.npz)
+$(BUILD)/%/mesh/crankshaft_mesh.npz: cases/%.toml $(BUILD)/%/geometry/profile.csv $(SRC_mesh) | $(STAMP)
+	$(RUN) mesh --case $< --out $(BUILD)/$*/mesh $(Q)
+
 stage-fem: $(foreach c,$(CASES),$(BUILD)/$(c)/fem/stiffness.json)
-$(BUILD)/%/fem/stiffness.json: cases/%.toml $(BUILD)/%/geometry/profile.csv $(SRC_fem) | $(STAMP)
-	$(RUN) fem --case $< --out $(BUILD)/$*/fem $(Q)
+$(BUILD)/%/fem/stiffness.json: cases/%.toml $(BUILD)/%/mesh/crankshaft_mesh.npz $(SRC_fem) | $(STAMP)
+	$(RUN) fem --case $< --mesh $(BUILD)/$*/mesh --out $(BUILD)/$*/fem $(Q)
 
 STIFF = --stiffness $(BUILD)/$*/fem/stiffness.json
 
@@ -78,7 +84,7 @@ stage-diagnosis: $(foreach c,$(CASES),$(if $(RECORDS_$(c)),$(BUILD)/$(c)/diagnos
 $(BUILD)/%/diagnosis/diagnosis.json: cases/%.toml $(BUILD)/%/fem/stiffness.json $(SRC_diagnosis) $(SRC_dynamics) | $(STAMP)
 	$(RUN) diagnose --case $< $(STIFF) --measured $(RECORDS_$*) --out $(BUILD)/$*/diagnosis $(Q)
 
-STAGES = geometry/profile.csv fem/stiffness.json matrix/te_std.csv hysteresis/hysteresis.json \
+STAGES = geometry/profile.csv mesh/crankshaft_mesh.npz fem/stiffness.json matrix/te_std.csv hysteresis/hysteresis.json \
          fourbar/comparison.md tolerance/summary.json
 report: $(foreach c,$(CASES),$(BUILD)/$(c)/report/index.html)
 .SECONDEXPANSION:

@@ -263,7 +263,10 @@ def _scratch_cwd():
 
 def tet_mesh_from_solid(solid, edge_length_m: float, *, tolerance_m: float | None = None) -> Mesh3D:
     """Tetrahedra (pytetwild) of a CadQuery solid/Workplane given in millimetres; output in metres.
-    fTetWild runs in a scratch directory, so nothing is left in the caller's folder."""
+    fTetWild runs in a scratch directory, so nothing is left in the caller's folder.
+    fTetWild is not reproducible run to run (measured: the same surface gave 2112..2374 nodes, even
+    single-threaded), so the mesh stage writes the mesh once and the fem stage reuses it: everything
+    downstream of a mesh file is deterministic."""
     import pytetwild
     shape = solid.val() if hasattr(solid, "val") else solid
     tol = (tolerance_m or edge_length_m / 20) * 1e3
@@ -299,3 +302,25 @@ def write_vtu(path: str | Path, points: np.ndarray, cells: np.ndarray,
                     cell_data={k: [np.asarray(v)] for k, v in (cell_data or {}).items()})
     with atomic_path(path) as tmp:
         meshio.write(tmp, m, file_format="vtu")
+
+
+def save_mesh3d(path: str | Path, mesh: Mesh3D, **meta: str | float) -> None:
+    """A tet mesh and what it was made from (e.g. the solid's fingerprint), atomically (.npz)."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, points=mesh.points, tetrahedra=mesh.tetrahedra,
+                     **{f"meta_{k}": np.asarray(v) for k, v in meta.items()})
+
+
+def load_mesh3d(path: str | Path, **expect: str | float) -> Mesh3D:
+    """Read a mesh of `save_mesh3d`; every `expect` entry must match the stored one."""
+    path = Path(path)
+    if not path.exists():
+        raise MeshError(f"{path}: mesh not found (run `python -m pipeline mesh` first)")
+    with np.load(path) as z:
+        for key, want in expect.items():
+            got = z[f"meta_{key}"].item() if f"meta_{key}" in z.files else None
+            if got != want:
+                raise MeshError(f"{path}: made for {key} = {got!r}, this case needs {want!r}; "
+                                f"rerun `python -m pipeline mesh` for this case")
+        return Mesh3D(z["points"].copy(), z["tetrahedra"].copy())

@@ -25,11 +25,12 @@ class FemRun:
 
 
 def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: float | None = None,
-                    positions_deg=None) -> FemRun:
+                    positions_deg=None, crank_mesh=None) -> FemRun:
+    """crank_mesh: the crankshaft tet mesh of the mesh stage (fem.shaft.crankshaft_mesh), else made here."""
     t0 = time.perf_counter()
     tm = pin_contact.tooth_pair_map(case, positions_deg=positions_deg, mesh_size_m=mesh_size_m)
     t1 = time.perf_counter()
-    cs, fields = shaft.crankshaft_stiffness(case, crank_edge_m)
+    cs, fields = shaft.crankshaft_stiffness(case, crank_edge_m, mesh3=crank_mesh)
     t2 = time.perf_counter()
     beam = shaft.crankshaft_beam_reference(case)
     ta = bearing.turning_arm_curve(case, bearing.turning_arm_max_load(case, 2.5 * case.rated_torque_Nm))

@@ -115,18 +115,40 @@ def _cantilever(m3: Mesh3D, radius_m, length_m, E, nu, F, T) -> dict:
     return {"tip_deflection_m": ux_mean, "twist_rad": rot, "dofs": int(K.shape[0]), "tip_J_m4": J}
 
 
+def default_edge_length_m(case) -> float:
+    """Tet edge length of the crankshaft mesh: journal radius / 2.5 (P2 elements: within 3 % of beam
+    theory on the plain-shaft check at this density)."""
+    return case.crankshaft.journal_radius_mm * 1e-3 / 2.5
+
+
+def crankshaft_fingerprint(case) -> str:
+    """What the crankshaft solid depends on ([crankshaft] and [cycloid], see geometry.solids): a mesh
+    made for another fingerprint is not this case's shaft."""
+    import hashlib
+    import json
+    from dataclasses import asdict
+    blob = json.dumps([asdict(case.crankshaft), asdict(case.cycloid)], sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def crankshaft_mesh(case, edge_length_m: float | None = None) -> Mesh3D:
+    """Tetrahedra of geometry.solids.crankshaft_solid(case) (pytetwild); the slow part of the stage."""
+    from geometry.solids import crankshaft_solid
+    return tet_mesh_from_solid(crankshaft_solid(case), edge_length_m or default_edge_length_m(case))
+
+
 def crankshaft_stiffness(case, edge_length_m: float | None = None, *,
                          mesh3: Mesh3D | None = None) -> tuple[ShaftResult, dict]:
     """Lateral stiffness at eccentric 1 (force along x, shaft pinned at the bearing centres) and
     torsional stiffness from the planet-seat end face to eccentric 1 (eccentric surface held).
     mesh3: a tet mesh of crankshaft_solid(case) made beforehand (the mesh stage), else meshed here."""
     from skfem import MeshTet  # noqa: F401
-    from geometry.solids import crankshaft_layout, crankshaft_solid
+    from geometry.solids import crankshaft_layout
     k, c = case.crankshaft, case.cycloid
     E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
     lay = crankshaft_layout(case)
-    h = edge_length_m or k.journal_radius_mm * 1e-3 / 2.5
-    m3 = mesh3 if mesh3 is not None else tet_mesh_from_solid(crankshaft_solid(case), h)
+    h = edge_length_m or default_edge_length_m(case)
+    m3 = mesh3 if mesh3 is not None else crankshaft_mesh(case, h)
     basis = elastic.basis_3d(m3, order=2)
     mesh = basis.mesh
     K = elastic.stiffness(basis, E, nu)

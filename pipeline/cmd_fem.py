@@ -1,6 +1,7 @@
 """`python -m pipeline fem`: the FEM stage (stiffness.json, meshes, pictures) or the Hertz benchmark.
 
-    python -m pipeline fem --case CASE.toml --out DIR [--mesh-size-mm H] [--quiet]
+    python -m pipeline mesh --case CASE.toml --out DIR [--crank-edge-mm H] [--quiet]
+    python -m pipeline fem --case CASE.toml --out DIR [--mesh MESHDIR] [--mesh-size-mm H] [--quiet]
     python -m pipeline fem --benchmark hertz --radius-mm R --width-mm L --load-N F --out DIR
                            [--counter-radius-mm Rc] [--mesh-size-mm H]
 """
@@ -16,6 +17,13 @@ from geometry.artifacts import InputError, write_json_atomic
 
 
 def register(sub) -> None:
+    m = sub.add_parser("mesh", help="the crankshaft tet mesh (pytetwild) that the fem stage reuses")
+    m.add_argument("--case", required=True, help="case TOML")
+    m.add_argument("--out", required=True, help="output folder")
+    m.add_argument("--crank-edge-mm", type=float, default=None,
+                   help="tet edge length [mm] (default: journal radius / 2.5)")
+    m.add_argument("--quiet", action="store_true")
+    m.set_defaults(func=run_mesh)
     p = sub.add_parser("fem", help="FE stiffness of a case, or the Hertz contact benchmark")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--case", help="case TOML")
@@ -23,12 +31,39 @@ def register(sub) -> None:
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--mesh-size-mm", type=float, default=None,
                    help="element size at the contact [mm] (default: 1/12 of the smallest Hertz half-width)")
+    p.add_argument("--mesh", default=None, help="folder of the mesh stage (crankshaft_mesh.npz) to reuse")
     p.add_argument("--radius-mm", type=float)
     p.add_argument("--width-mm", type=float)
     p.add_argument("--load-N", type=float)
     p.add_argument("--counter-radius-mm", type=float, default=None)
     p.add_argument("--quiet", action="store_true")
     p.set_defaults(func=run)
+
+
+MESH_FILE = "crankshaft_mesh.npz"
+
+
+def run_mesh(args) -> int:
+    """The mesh stage: the 3D crankshaft tets (the slow, load-independent part of the FE stage),
+    as .npz for `fem --mesh` and .vtu for ParaView. The 2D tooth mesh depends on the contact
+    positions and Hertz widths, so the fem stage makes it itself (seconds)."""
+    from fem.mesh import save_mesh3d, write_vtu
+    from fem.shaft import crankshaft_fingerprint, crankshaft_mesh, default_edge_length_m
+    from geometry.params import load_case
+    if args.crank_edge_mm is not None and not (args.crank_edge_mm > 0):
+        raise InputError(f"--crank-edge-mm = {args.crank_edge_mm}: must be positive")
+    t0 = time.perf_counter()
+    case = load_case(args.case)
+    h = args.crank_edge_mm * 1e-3 if args.crank_edge_mm else default_edge_length_m(case)
+    m3 = crankshaft_mesh(case, h)
+    out = Path(args.out)
+    write_vtu(out / "crankshaft_mesh.vtu", m3.points, m3.tetrahedra)
+    save_mesh3d(out / MESH_FILE, m3, case=case.name, fingerprint=crankshaft_fingerprint(case),
+                edge_length_m=h)
+    if not args.quiet:
+        print(f"mesh {case.name}: crankshaft {len(m3.points)} nodes, {len(m3.tetrahedra)} tets, edge "
+              f"{h * 1e3:.2f} mm; {time.perf_counter() - t0:.0f} s -> {out / MESH_FILE}")
+    return 0
 
 
 def run(args) -> int:
@@ -63,7 +98,13 @@ def _case(args, out: Path) -> int:
     from geometry.params import load_case
     t0 = time.perf_counter()
     case = load_case(args.case)
-    runres = build_stiffness(case, mesh_size_m=None if args.mesh_size_mm is None else args.mesh_size_mm * 1e-3)
+    crank_mesh = None
+    if args.mesh:
+        from fem.mesh import load_mesh3d
+        from fem.shaft import crankshaft_fingerprint
+        crank_mesh = load_mesh3d(Path(args.mesh) / MESH_FILE, fingerprint=crankshaft_fingerprint(case))
+    runres = build_stiffness(case, mesh_size_m=None if args.mesh_size_mm is None else args.mesh_size_mm * 1e-3,
+                             crank_mesh=crank_mesh)
     stiffness.save(runres.model, out / "stiffness.json")
     _write_meshes(runres, out)
     _pictures(runres, out)

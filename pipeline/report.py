@@ -30,6 +30,9 @@ SECTIONS = (
     Section("Geometry", "geometry",
             "Parametric CadQuery solids of the second stage, from the validated case file; "
             "profile with offset/equidistant modification.", ("geometry.json",)),
+    Section("Meshes", "mesh",
+            "Crankshaft tetrahedra from the CadQuery solid (pytetwild), made once and reused by the FE stage.",
+            ()),
     Section("Finite elements", "fem",
             "scikit-fem: 2D cycloid-pin contact (condensed, exact non-penetration), 3D crankshaft on "
             "its bearings, needle (turning-arm) bearing; reduced to stiffness curves.",
