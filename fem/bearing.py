@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fem import contact, elastic, hertz
-from fem.mesh import Mesh2D, annulus_mesh
+from fem.mesh import annulus_mesh
 from geometry.artifacts import InputError
 
 LOAD_ZONE_DEG = 110.0     # needles modelled: |psi| <= this (loaded zone is +-90 deg at zero clearance)
@@ -67,7 +67,6 @@ def needle_bearing_fe(radial_loads_N, *, eccentric_radius_m: float, needle_radiu
     Es = hertz.contact_modulus(E_Pa, nu)
     q_hi = 4.08 * loads.max() / Z * 1.3        # margin over Stribeck for the race compliance
     b_max = float(hertz.hertz_line(q_hi, L, hertz.effective_radius(rn, -a), Es)[1])
-    b_min = float(hertz.hertz_line(4.08 * loads.min() / Z, L, hertz.effective_radius(rn, re), Es)[1])
     h = mesh_size_m or b_max / 10
     if not (0 < h < b_max):
         raise InputError(f"mesh size = {h * 1e3:g} mm: must be below the largest Hertz half-width "
@@ -88,7 +87,6 @@ def needle_bearing_fe(radial_loads_N, *, eccentric_radius_m: float, needle_radiu
 
     inner, outer = candidates(ecc, "outer", re), candidates(bore, "inner", a)
     rows, blocks = [], []
-    S_cols = []
     g0 = []
     for j, p in enumerate(psi):
         e_j = np.array([math.cos(p), math.sin(p)])

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fem import contact, elastic, hertz
-from fem.mesh import Mesh2D, annulus_mesh, block_mesh, pin_mesh, profile_sector_mesh
+from fem.mesh import Mesh2D, block_mesh, pin_mesh, profile_sector_mesh
 from geometry.artifacts import InputError
 from geometry.profile import cycloid_xy, profile_args
 
@@ -263,7 +263,19 @@ class ToothPairMap:
     disc_mesh: Mesh2D = field(repr=False)
     pin_mesh_local: Mesh2D = field(repr=False)
     timing_s: dict = field(default_factory=dict)
-    snapshot: dict = field(default_factory=dict, repr=False)   # fields of one solution, for pictures
+    snapshot: dict = field(default_factory=dict, repr=False)   # one solution's fields (arrays), for pictures
+
+
+def _disc_von_mises(dmesh: Mesh2D, setup, res, centre_m, fac, E: float, nu: float) -> np.ndarray:
+    """Von Mises stress [Pa] per element of the disc under one contact solution (one more solve with
+    the same factors; the contact pressure acts along the pin-centre direction)."""
+    from fem.contact import node_operator
+    x = dmesh.points[setup.nodes]
+    d = centre_m - x
+    n = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    B = node_operator(setup.nodes, -n, fac.n_dofs)
+    u = fac.solve(B.T @ (res.pressure_Pa * setup.tributary_m))   # per metre of width
+    return elastic.stress_2d(elastic.basis_2d(dmesh), u, E, nu)["von_mises"]
 
 
 def tooth_pair_map(case, *, positions_deg=None, loads_N=None, mesh_size_m: float | None = None,
@@ -334,9 +346,9 @@ def tooth_pair_map(case, *, positions_deg=None, loads_N=None, mesh_size_m: float
                                  f"candidate zone: the profile is too flat there for a line contact")
             app[ip, il], pk[ip, il], hw[ip, il] = r.approach_m, r.peak_pressure_Pa, r.half_width_m
             if il == L - 1 and ip == int(np.argmin(np.abs(pos - 90))):
-                snapshot = {"position_deg": float(pos[ip]), "load_N": float(F), "setup": setup, "E_Pa": E, "nu": nu,
-                            "result": r, "centre_m": centre_mm * 1e-3, "normal": nrm,
-                            "factor": dfac}
+                snapshot = {"position_deg": float(pos[ip]), "load_N": float(F), "centre_m": centre_mm * 1e-3,
+                            "normal": nrm,
+                            "von_mises_Pa": _disc_von_mises(dmesh, setup, r, centre_mm * 1e-3, dfac, E, nu)}
     t_solve = time.perf_counter()
     fits = [hertz.fit_power_law(loads, app[i]) for i in range(P)]
     return ToothPairMap(pos, loads, app, pk, hw, p0_h, b_h, rho, np.array([f[0] for f in fits]),

@@ -11,7 +11,6 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
-import numpy as np
 
 from fem import bearing, involute, pin_contact, shaft
 from fem.stiffness import PinContact, StiffnessModel, TurningArm
@@ -24,16 +23,38 @@ class FemRun:
     crank_fields: dict
 
 
-def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: float | None = None,
-                    positions_deg=None, crank_mesh=None) -> FemRun:
-    """crank_mesh: the crankshaft tet mesh of the mesh stage (fem.shaft.crankshaft_mesh), else made here."""
+def _timed(func, *args, **kwargs):
     t0 = time.perf_counter()
-    tm = pin_contact.tooth_pair_map(case, positions_deg=positions_deg, mesh_size_m=mesh_size_m)
-    t1 = time.perf_counter()
-    cs, fields = shaft.crankshaft_stiffness(case, crank_edge_m, mesh3=crank_mesh)
-    t2 = time.perf_counter()
+    return func(*args, **kwargs), time.perf_counter() - t0
+
+
+def _component(name: str, case, options: dict):
+    """One independent FE sub-problem of the stage (a task: pure, picklable in and out)."""
+    if name == "tooth_map":
+        return _timed(pin_contact.tooth_pair_map, case, positions_deg=options["positions_deg"],
+                      mesh_size_m=options["mesh_size_m"])
+    if name == "crankshaft":
+        return _timed(shaft.crankshaft_stiffness, case, options["crank_edge_m"], mesh3=options["crank_mesh"])
+    if name == "turning_arm":
+        return _timed(bearing.turning_arm_curve, case,
+                      bearing.turning_arm_max_load(case, 2.5 * case.rated_torque_Nm))
+    raise ValueError(name)
+
+
+def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: float | None = None,
+                    positions_deg=None, crank_mesh=None, map_tasks=None) -> FemRun:
+    """crank_mesh: the crankshaft tet mesh of the mesh stage (fem.shaft.crankshaft_mesh), else made here.
+    The tooth map, the crankshaft and the needle bearing are independent FE problems, run through
+    `map_tasks(func, tasks) -> results in order` (default: one after the other, in this process;
+    pipeline.sweep.run_tasks puts them on local processes or a Dask cluster, same results)."""
+    t0 = time.perf_counter()
+    map_tasks = map_tasks or (lambda func, tasks: [func(*t) for t in tasks])
+    options = {"positions_deg": positions_deg, "mesh_size_m": mesh_size_m, "crank_edge_m": crank_edge_m,
+               "crank_mesh": crank_mesh}
+    ((tm, t_map), ((cs, fields), t_crank), (ta, t_bearing)) = map_tasks(
+        _component, [(n, case, options) for n in ("tooth_map", "crankshaft", "turning_arm")],
+    )
     beam = shaft.crankshaft_beam_reference(case)
-    ta = bearing.turning_arm_curve(case, bearing.turning_arm_max_load(case, 2.5 * case.rated_torque_Nm))
     inv = involute.mesh_stiffness(case)
     ksb = case.crankshaft.support_bearing_stiffness_N_per_um * 1e6
     series = 1.0 / (1.0 / cs.bending_stiffness_N_per_m + 1.0 / (2 * ksb))
@@ -78,7 +99,8 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
             "turning_arm_fe_qmax_N": ta["fe_qmax_N"].tolist(),
             "turning_arm_stribeck_qmax_N": ta["stribeck_qmax_N"].tolist(),
             "turning_arm_mesh_size_m": ta["mesh_size_m"],
-            "timing_s": dict(tm.timing_s, crankshaft_s=t2 - t1, total_s=time.perf_counter() - t0),
+            "timing_s": dict(tm.timing_s, crankshaft_s=t_crank, turning_arm_s=t_bearing,
+                             tooth_map_s=t_map, total_s=time.perf_counter() - t0),
         })
     model.check(case.name)
     return FemRun(model, tm, fields)

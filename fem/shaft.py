@@ -14,7 +14,6 @@ Limits: linear elastic, no fillets, no keyways/splines, needle-race hardening ig
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,7 +91,6 @@ def plain_shaft_check(radius_m: float = 5e-3, length_m: float = 100e-3, E: float
 
 
 def _cantilever(m3: Mesh3D, radius_m, length_m, E, nu, F, T) -> dict:
-    from skfem import MeshTet
     basis = elastic.basis_3d(m3, order=2)
     mesh = basis.mesh
     K = elastic.stiffness(basis, E, nu)
@@ -142,9 +140,8 @@ def crankshaft_stiffness(case, edge_length_m: float | None = None, *,
     """Lateral stiffness at eccentric 1 (force along x, shaft pinned at the bearing centres) and
     torsional stiffness from the planet-seat end face to eccentric 1 (eccentric surface held).
     mesh3: a tet mesh of crankshaft_solid(case) made beforehand (the mesh stage), else meshed here."""
-    from skfem import MeshTet  # noqa: F401
     from geometry.solids import crankshaft_layout
-    k, c = case.crankshaft, case.cycloid
+    k = case.crankshaft
     E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
     lay = crankshaft_layout(case)
     h = edge_length_m or default_edge_length_m(case)
@@ -152,7 +149,7 @@ def crankshaft_stiffness(case, edge_length_m: float | None = None, *,
     basis = elastic.basis_3d(m3, order=2)
     mesh = basis.mesh
     K = elastic.stiffness(basis, E, nu)
-    rj, re, e = k.journal_radius_mm * 1e-3, k.eccentric_radius_mm * 1e-3, c.eccentricity_mm * 1e-3
+    rj, re = k.journal_radius_mm * 1e-3, k.eccentric_radius_mm * 1e-3
     span = k.support_span_mm * 1e-3
     band = 0.6 * h
     on_journal = lambda x: np.abs(np.hypot(x[0], x[1]) - rj) < 0.03 * rj  # noqa: E731
@@ -202,8 +199,9 @@ def crankshaft_stiffness(case, edge_length_m: float | None = None, *,
     x, y = basis.doflocs[0, ix], basis.doflocs[1, ix]
     rot = float(np.sum(x * ut[iy] - y * ut[ix]) / np.sum(x * x + y * y))
     result = ShaftResult(kb, T / rot, int(K.shape[0]), h)
-    pictures = {"mesh": m3, "displacement_m": u, "basis": basis}
-    return result, pictures
+    nd = basis.nodal_dofs   # vertex displacements (the P2 mid-edge dofs are not needed for a picture)
+    uv = np.column_stack([u[nd[0]], u[nd[1]], u[nd[2]]])[: len(m3.points)]
+    return result, {"mesh": m3, "displacement_m": uv}
 
 
 def crankshaft_beam_reference(case, n: int = 20001) -> dict:
