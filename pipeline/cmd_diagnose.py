@@ -2,10 +2,12 @@
 
 Writes DIR/diagnosis.json (DESIGN.md keys) and DIR/index.html. Stiffness defaults to
 build/<case.name>/fem/stiffness.json. `--columns NAME=SOURCE,...` (and `--no-header`) read records
-with other column names or none; nothing is guessed.
+with other column names or none; nothing is guessed. Progress (one tick per record simulated
+through the model, on stderr) and a one-line summary (stdout) are shown unless --quiet.
 """
 from __future__ import annotations
 
+import sys
 
 from geometry.artifacts import InputError
 
@@ -23,7 +25,7 @@ def register(sub) -> None:
     p.add_argument("--columns", default=None, help="column map NAME=SOURCE,... (SOURCE a name or 0-based index)")
     p.add_argument("--no-header", action="store_true", help="records have no header row (needs --columns)")
     p.add_argument("--points-per-rev", type=int, default=1024, help="simulated points per output revolution")
-    p.add_argument("--quiet", action="store_true")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no summary line")
     p.set_defaults(func=run)
 
 
@@ -32,14 +34,42 @@ def run(args) -> int:
     from geometry.params import load_case
     from pipeline.diagnosis.diagnose import diagnose
     from pipeline.diagnosis.report import write_report
+    from pipeline.diagnosis.simulate import quasi_static_te
     from pipeline.records import parse_column_map, read_record
     case = load_case(args.case)
     stiffness = for_case(case, args.stiffness)
     cols = parse_column_map(args.columns) if args.columns else None
     records = [read_record(p, cols, header=not args.no_header) for p in args.measured]
-    diag = diagnose(case, stiffness, records, points_per_rev=args.points_per_rev)
+    te_model, bar = quasi_static_te, None
+    if not args.quiet:
+        from tqdm import tqdm
+        bar = tqdm(desc="diagnose", unit=" record sims", file=sys.stderr)
+        te_model = _ticking(quasi_static_te, bar)
+    try:
+        diag = diagnose(case, stiffness, records, te_model, points_per_rev=args.points_per_rev)
+    finally:
+        if bar is not None:
+            bar.close()
     out = write_report(diag, case, args.out)
     if not args.quiet:
-        print(f"diagnose: cause {diag.cause}; baseline RMS {diag.residual_rms_arcsec:.2f} arcsec"
-              + (f"; gain {diag.extension.gain:.3f}" if diag.extension else "") + f" -> {out}")
+        print(summary_line(diag, out))
     return 0
+
+
+def _ticking(te_model, bar):
+    """te_model that ticks `bar` once per record simulated."""
+    def wrapped(*a, **k):
+        out = te_model(*a, **k)
+        bar.update(1)
+        return out
+    return wrapped
+
+
+def summary_line(diag, out) -> str:
+    """cause, baseline RMS, extension causes, gain and holdout gain, where the report went."""
+    e = diag.extension
+    ext = "no extension" if e is None else (
+        f"extension {'+'.join(e.causes)}: gain {e.gain:.3f}, holdout "
+        + ("n/a" if e.holdout_gain is None else f"{e.holdout_gain:.3f}"))
+    return (f"diagnose: cause {diag.cause}; {len(diag.findings)} finding(s); baseline RMS "
+            f"{diag.residual_rms_arcsec:.2f} arcsec; {ext} -> {out}")

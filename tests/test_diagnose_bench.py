@@ -6,9 +6,10 @@ Records: forward/backward pairs at 3, 30 and 60 % of rated torque, one output re
 samples each; the 30 % pair is held out of the fit (hold-out rule of diagnose.py).
 Tolerances: parameters within 5 % of the drawn value (the noise moves them < 0.5 % on these lines;
 5 % leaves room for the model's nonlinearity between the unit signature and the drawn size).
-crank_eccentricity_error is not among the causes here: the model's static solver does not converge
-with per-crank eccentricity errors of a few um (reported to the dynamics issue); its statistics
-are covered in test_diagnose_machinery.py with a stand-in model.
+crank_eccentricity_error: its signature is pinned through the model here (the two discs cancel
+the zp x line, the rectified 2 zp x part remains); its blind fit is NOT among the seeded cases
+here yet (the threshold response gives the fit local minima, see bench.py); its statistics are
+covered in test_diagnose_machinery.py with a stand-in model.
 """
 import numpy as np
 import pytest
@@ -57,3 +58,26 @@ def test_coaxiality_and_softer_reducer_together_give_two_findings():
     d = diagnose(CASE, STIFF, _records(effs, 600), points_per_rev=PPR)
     assert {f.cause for f in d.findings} >= {"output_coaxiality", "torsional_stiffness"}
     assert d.extension.gain >= 0.6
+
+
+def test_a_crank_misfit_shows_at_twice_the_crankshaft_order_even_in_its_size():
+    from pipeline.diagnosis.orders import spectrum_of
+    from pipeline.diagnosis.signatures import crank_pattern_um
+    zp, T = CASE.cycloid.zp, 0.03 * CASE.rated_torque_Nm
+    ang = np.linspace(0.0, 360.0 * CASE.ratio, PPR + 1)
+    base = quasi_static_te(CASE, STIFF, ang, T, 1)
+
+    def lines(de_um):
+        c = CASE.with_errors(crank_eccentricity_um=tuple(float(v) for v in de_um))
+        sp = spectrum_of(ang / CASE.ratio, quasi_static_te(c, STIFF, ang, T, 1) - base)
+        return sp.at(zp), sp.at(2 * zp)
+    de = crank_pattern_um(3, (10.0, 0.0))              # A = 10 um, phi = 0
+    z1, z2 = lines(de)
+    _, m2 = lines(-de)
+    _, n2 = lines(de / 10.0)
+    # measured through this model (RV-40E, 3 % rated): 10 um -> 2 zp x 10.4 arcsec, zp x 0.003;
+    # -10 um -> 10.4; 1 um -> 2 zp x 0.01 (inside the elastic approach: second order).
+    # Tolerances: factor-level bounds, 5 % on the evenness (the two measured 0.07 % apart).
+    assert z2 > 5.0 and z1 < 0.02 * z2
+    assert m2 == pytest.approx(z2, rel=0.05)
+    assert n2 < 0.05 * z2

@@ -8,8 +8,13 @@ the loader would (write them with `write_records` to test the CLI). Truth is kep
 records in `HiddenEffect.truth`, in the units diagnosis.json reports.
 Sizes drawn (a tolerance-class error, well above the noise):
   output_coaxiality         e in [5, 25] um, phase in [-180, 180) deg
-  crank_eccentricity_error  de_j = A cos(phi - 2 pi j / n_crank), A in [2, 5] um (zero mean: the
-                            combination the TE sees; a common change cancels to first order)
+  crank_eccentricity_error  de_j = A cos(phi - 2 pi j / n_crank), A in [6, 12] um, phi in [0, 180)
+                            deg (zero mean; a common change is a change of E). Large on purpose:
+                            the model answers a crank misfit only where it exceeds the elastic
+                            approach of the loaded pins (signatures.py): ~0.01 arcsec at 1 um,
+                            6-10 arcsec (2 zp x) at 5-10 um and 3 % rated torque (RV-40E). Capped
+                            at 12 um: beyond it the light-load response falls again (20 um: 6.3
+                            arcsec) and the fit has local minima (a known limit, not tested).
   torsional_stiffness       factor c in [0.55, 0.8] or [1.3, 1.8] on every FE stiffness
   backlash                  extra pin clearance in [4, 12] um (equidistant modification)
 """
@@ -20,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.diagnosis.signatures import _backlash, _coaxiality, _crank_ecc, _stiffness
+from pipeline.diagnosis.signatures import _backlash, _coaxiality, _crank_ecc, _stiffness, crank_pattern_um
 from pipeline.records import BenchRecord, write_record
 
 CAUSES = ("output_coaxiality", "crank_eccentricity_error", "torsional_stiffness", "backlash")
@@ -39,11 +44,12 @@ def draw_effect(rng: np.random.Generator, case, cause: str) -> HiddenEffect:
         return HiddenEffect(cause, (e * np.cos(np.radians(ph)), e * np.sin(np.radians(ph))),
                             {"output_coaxiality_um": e, "output_coaxiality_phase_deg": ph})
     if cause == "crank_eccentricity_error":
-        n = case.carrier.crank_count
-        a, ph = rng.uniform(2.0, 5.0), rng.uniform(0.0, 2 * np.pi)
-        p = tuple(a * np.cos(ph - 2 * np.pi * j / n) for j in range(n))
+        a, ph = rng.uniform(6.0, 12.0), rng.uniform(0.0, 180.0)
+        p = (a * np.cos(np.radians(2 * ph)), a * np.sin(np.radians(2 * ph)))
         return HiddenEffect(cause, p, {"crank_eccentricity_error_amplitude_um": a,
-                                       "crank_eccentricity_error_um": list(p)})
+                                       "crank_eccentricity_error_phase_deg": ph,
+                                       "crank_eccentricity_error_um": list(
+                                           crank_pattern_um(case.carrier.crank_count, p))})
     if cause == "torsional_stiffness":
         c = rng.uniform(0.55, 0.8) if rng.random() < 0.5 else rng.uniform(1.3, 1.8)
         return HiddenEffect(cause, (1.0 / c - 1.0,), {"stiffness_factor": c})

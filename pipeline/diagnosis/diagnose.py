@@ -16,19 +16,24 @@ evidence the records hold (e.g. one torque level cannot tell wind-up from lost m
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import optimize, stats
 
 from pipeline.diagnosis.features import FeatureMap
 from pipeline.diagnosis.fit import CauseColumns, MatchResult, match, reduce_columns
-from pipeline.diagnosis.orders import label_order, spectrum_of
-from pipeline.diagnosis.signatures import CauseSpec, SignatureSummary, cause_specs, signature_columns, summarise
+from pipeline.diagnosis.orders import spectrum_of
+from pipeline.diagnosis.signatures import (SignatureSummary, cause_specs, crank_pattern_um, signature_columns,
+                                           summarise)
 from pipeline.diagnosis.significance import Line, test_lines
 from pipeline.diagnosis.simulate import TEModel, quasi_static_te, simulate_record
 from pipeline.diagnosis.zeros import group_records
 from pipeline.records import BenchRecord
+
+
+REFRESH_STEP = 0.3   # forward-difference step of a re-taken Jacobian column, in library units
+START_SCALES = (0.5, 0.75, 1.0, 1.5)   # coarse scan of a threshold cause's linear start
 
 
 @dataclass(frozen=True)
@@ -158,13 +163,15 @@ def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = qu
     for k, fm in enumerate(fmaps):
         X_off[pos, gids.index(groups[k])] = 1.0
         pos += fm.size
-    cause_cols = []
+    dc_rows = np.r_[0, np.cumsum([fm.size for fm in fmaps])[:-1]]
+    name_cols, fit_cols = [], []
     for sp in specs:
         Xraw = np.vstack([np.column_stack([fm.apply(c[:, j]) for j in range(c.shape[1])])
                           for fm, c in zip(fmaps, raw_cols[sp.cause])])
-        Xr, V = reduce_columns(Xraw * w[:, None])
-        cause_cols.append(CauseColumns(sp.cause, Xr / w[:, None], V))
-    result = match(y, w, X_off, cause_cols, p_enter=p_enter)
+        naming, fitting = _cause_columns(sp, Xraw, w, dc_rows)
+        name_cols.append(naming)
+        fit_cols.append(fitting)
+    result = match(y, w, X_off, name_cols, p_enter=p_enter)
 
     lines = []
     for rec, res in zip(records, before):
@@ -187,11 +194,29 @@ def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = qu
     extension, after = None, None
     if result.selected:
         extension, after = _extend(case, stiffness, records, groups, meas, te_of, fmaps, w, specs,
-                                   cause_cols, result, holdout, max_nfev, te_model)
+                                   fit_cols, result, holdout, max_nfev, te_model)
     return Diagnosis(findings[0].cause if findings else None, tuple(findings), rms(before), pp,
                      extension, tuple(records), tuple(groups), tuple(meas), tuple(sim0),
                      tuple(before), tuple(after) if after is not None else None, tuple(lines),
                      summaries, tuple(notes))
+
+
+def _cause_columns(spec, Xraw, w, dc_rows) -> tuple[CauseColumns, CauseColumns]:
+    """(columns that name the cause, columns the extension fits) from the raw feature columns.
+
+    They differ for a `dc_even` cause (signatures.py): its mean-TE response depends on |p| only,
+    which no linear column can carry, so it is named on its order lines alone (mean rows zeroed:
+    a mean shift never names it, and cannot steal a lost-motion gap from `backlash`); the fit keeps
+    the full secant columns as a first Jacobian (the model in the loop gives the true mean shift).
+    Limit: its own mean shift may then also be named as `backlash` (second finding)."""
+    Xr, V = reduce_columns(Xraw * w[:, None])
+    fitting = CauseColumns(spec.cause, Xr / w[:, None], V)
+    if not spec.dc_even:
+        return fitting, fitting
+    lines = Xraw.copy()
+    lines[dc_rows] = 0.0
+    Xn, Vn = reduce_columns(lines * w[:, None])
+    return CauseColumns(spec.cause, Xn / w[:, None], Vn), fitting
 
 
 def _apply(case, stiffness, specs, chosen, x, cause_cols):
@@ -240,8 +265,38 @@ def _extend(case, stiffness, records, groups, meas, te_of, fmaps, w, specs, caus
         cache[tuple(np.round(x, 12))] = sims
         return (yy - X_off @ x[nz:]) * wf
 
+    # Jacobian: the library's, fixed, for causes near linear at their size; the columns of a
+    # `dc_even` cause (a threshold response, signatures.py) are re-taken by the model at every
+    # iterate (forward differences of REFRESH_STEP x its unit), so the steps follow the real slope
+    spans, k = [], 0
+    for c in chosen:
+        q = cols[c].X.shape[1]
+        sp = next(t for t in specs if t.cause == c)
+        if sp.dc_even:
+            spans.append((k, q, REFRESH_STEP * sp.unit))
+        k += q
+
+    def jac(x):
+        if not spans:
+            return J
+        Jx, r0 = J.copy(), fun(x)
+        for k0, q, h in spans:
+            for j in range(k0, k0 + q):
+                dx = np.zeros_like(x)
+                dx[j] = h
+                Jx[:, j] = (fun(x + dx) - r0) / h
+        return Jx
+
+    if spans:   # a threshold response: start from the best of a coarse scan of its size
+        def scaled(f):
+            x = x0.copy()
+            for k0, q, _ in spans:
+                x[k0:k0 + q] *= f
+            return x
+        x0 = min((scaled(f) for f in START_SCALES), key=lambda x: float(np.sum(fun(x) ** 2)))
+
     try:
-        sol = optimize.least_squares(fun, x0, jac=lambda x: J, method="lm" if len(rows) > len(x0) else "trf",
+        sol = optimize.least_squares(fun, x0, jac=jac, method="lm" if len(rows) > len(x0) else "trf",
                                      max_nfev=max_nfev, x_scale="jac")
         x = sol.x
     except ValueError:   # a step left the valid geometry (CaseError): keep the linear start
@@ -287,6 +342,16 @@ def _ci(v, sd, tq):
     return [float(v - tq * sd), float(v + tq * sd)]
 
 
+def _polar(p, cp, tq) -> tuple[float, list, float, list]:
+    """Magnitude and angle [deg] of (p0, p1) with linearised (delta-method) 95 % intervals."""
+    m = float(np.hypot(p[0], p[1]))
+    g = np.array([p[0], p[1]]) / max(m, 1e-12)                   # d m / d p
+    h = np.array([-p[1], p[0]]) / max(m * m, 1e-12)              # d angle / d p
+    ang = float(np.degrees(np.arctan2(p[1], p[0])))
+    return (m, _ci(m, float(np.sqrt(g @ cp @ g)), tq), ang,
+            _ci(ang, float(np.degrees(np.sqrt(h @ cp @ h))), tq))
+
+
 def _parameters(case, stiffness, chosen, cause_cols, z, cov_z, tq, te_model) -> dict:
     V = {c.cause: c.V for c in cause_cols}
     out, k = {}, 0
@@ -297,18 +362,17 @@ def _parameters(case, stiffness, chosen, cause_cols, z, cov_z, tq, te_model) -> 
         sd = np.sqrt(np.maximum(np.diag(cp), 0.0))
         k += q
         if c == "output_coaxiality":
-            e = float(np.hypot(*p))
-            g = np.array([p[0], p[1]]) / max(e, 1e-12)                    # d e / d p
-            h = np.array([-p[1], p[0]]) / max(e * e, 1e-12)               # d phi / d p
-            out["output_coaxiality_um"] = e
-            out["output_coaxiality_um_ci95"] = _ci(e, float(np.sqrt(g @ cp @ g)), tq)
-            ph = float(np.degrees(np.arctan2(p[1], p[0])))
-            out["output_coaxiality_phase_deg"] = ph
-            out["output_coaxiality_phase_deg_ci95"] = _ci(ph, float(np.degrees(np.sqrt(h @ cp @ h))), tq)
+            e, e_ci, ph, ph_ci = _polar(p, cp, tq)
+            out.update({"output_coaxiality_um": e, "output_coaxiality_um_ci95": e_ci,
+                        "output_coaxiality_phase_deg": ph, "output_coaxiality_phase_deg_ci95": ph_ci})
         elif c in ("crank_eccentricity_error", "crank_hole_position_error"):
-            out[f"{c}_um"] = [float(v) for v in p]
-            out[f"{c}_um_ci95"] = [_ci(v, s, tq) for v, s in zip(p, sd)]
-            out[f"{c}_amplitude_um"] = float(np.sqrt(2.0 * np.mean((p - p.mean()) ** 2)))
+            # p = (A cos 2 phi, A sin 2 phi): A and phi (mod 180 deg: A, -A look alike)
+            a, a_ci, two_ph, two_ph_ci = _polar(p, cp, tq)
+            out[f"{c}_amplitude_um"] = a
+            out[f"{c}_amplitude_um_ci95"] = a_ci
+            out[f"{c}_phase_deg"] = two_ph / 2.0
+            out[f"{c}_phase_deg_ci95"] = [v / 2.0 for v in two_ph_ci]
+            out[f"{c}_um"] = [float(v) for v in crank_pattern_um(case.carrier.crank_count, p)]
         elif c == "torsional_stiffness":
             kappa, skappa = float(p[0]), float(sd[0])
             out["stiffness_factor"] = 1.0 / (1.0 + kappa)
@@ -339,10 +403,14 @@ def _evidence(sel, case, records, groups, resid, lines, summaries, result) -> st
                 f"(orders {list(summ.orders)[:3]}, load-independent); no other source puts a 1x line there.")
     if c in ("crank_eccentricity_error", "crank_hole_position_error"):
         zp = case.cycloid.zp
-        amps = [spectrum_of(rec.output_angle_deg, r).at(zp) for rec, r in zip(records, resid)]
-        alt = f"; {', '.join(a for a, _ in sel.alternatives)} fits it about as well" if sel.alternatives else ""
-        return (f"{pfx}residual line at the crankshaft order zp = {zp}x of {max(amps):.2f} arcsec "
-                f"(model signature orders {list(summ.orders)[:4]}){alt}.")
+        amps = [(abs(rec.torque_Nm), spectrum_of(rec.output_angle_deg, r).at(2 * zp)) for rec, r in zip(records, resid)]
+        atxt = ", ".join(f"{a:.2f} at {t:g} N.m" for t, a in sorted(amps))
+        alt = (f"; {', '.join(a for a, _ in sel.alternatives)} fits the same lines about as well (the "
+               f"records cannot separate them)") if sel.alternatives else ""
+        return (f"{pfx}residual line at twice the crankshaft order, 2 zp = {2 * zp}x ({atxt} arcsec, "
+                f"falling with torque) with a shift toward less lost motion: the model's signature of "
+                f"a crank-to-crank misfit (the two discs, 180 deg apart, cancel the zp x line; the "
+                f"rectified part remains; orders {list(summ.orders)[:4]}){alt}.")
     gaps = _pair_gaps(records, groups, resid)
     gtxt = ", ".join(f"{g:+.1f} arcsec at {t:g} N.m" for t, g in gaps) or "no forward/backward pair"
     if c == "torsional_stiffness":

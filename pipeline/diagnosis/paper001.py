@@ -2,8 +2,8 @@
 measured TE 57.467 arcsec against a simulated band of -20 ... 25 arcsec, blamed on coaxiality.
 
 Read as peak-to-peak (the paper's band is a peak-to-peak of 45 arcsec). We simulate the same
-conditions (quasi-static: speed does not enter; "no load" = the no-load drag of simulate.py, one
-output revolution forward) and find the output coaxiality e [um] whose once-per-revolution term,
+conditions (quasi-static: speed does not enter; "no load" = torque 0, solved by the model on the
+flank of the forward motion under a vanishing preload; one output revolution forward) and find the output coaxiality e [um] whose once-per-revolution term,
 e/r sin(theta + phi) at the output flange radius r, brings our peak-to-peak to 57.467 arcsec (the
 smallest e over phi; for a model with almost no ripple this is ~ (57.467 / 2) r / 206265).
 The same is given against the paper's own band (45 arcsec) for comparison.
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from pipeline.diagnosis.simulate import NO_LOAD_DRAG_FRACTION, quasi_static_te
+from pipeline.diagnosis.simulate import quasi_static_te
 
 MEASURED_ARCSEC = 57.467
 PAPER_BAND_ARCSEC = (-20.0, 25.0)
@@ -37,7 +37,7 @@ def coaxiality_closing_um(te_arcsec: np.ndarray, theta_out_rad: np.ndarray, r_mm
 
 def worked_example(case, stiffness, te_model=quasi_static_te, points: int = 512) -> dict:
     ang = np.linspace(0.0, 360.0 * case.ratio, points, endpoint=False)
-    te = np.asarray(te_model(case, stiffness, ang, NO_LOAD_DRAG_FRACTION * case.rated_torque_Nm, 1))
+    te = np.asarray(te_model(case, stiffness, ang, 0.0, 1))
     theta = np.radians(ang / case.ratio)
     r = case.carrier.output_flange_radius_mm
     return {"simulated_pp_arcsec": float(np.ptp(te)),

@@ -8,16 +8,34 @@ orders, harmonic pattern, load and direction dependence all come from the model,
 Causes and their parameters (DESIGN.md ids):
   output_coaxiality         (e cos phi, e sin phi) [um]: the mounting offset e at phase phi, read by
                             the output encoder as e/r sin(theta_out + phi) (dynamics.model)
-  crank_eccentricity_error  per-crank eccentricity error [um] (Errors.crank_eccentricity_um)
-  crank_hole_position_error per-crank crank-hole position error [um] (Errors.crank_hole_position_um):
-                            shares the zp x line with the one above; kept so the overlap is shown
+  crank_eccentricity_error  (A cos 2 phi, A sin 2 phi) [um]: the zero-mean per-crank pattern
+                            de_j = A cos(phi - 2 pi j / n_crank) of eccentric-radius errors
+                            (Errors.crank_eccentricity_um; the common part is a change of E,
+                            i.e. of the pin clearance, covered by `backlash`). Why 2 phi: each
+                            crank carries the eccentrics of BOTH discs, 180 deg apart, so the
+                            misfit rotates the two discs by +d and -d (d = A / (2 a) sin(zp theta
+                            + phi), a the crank circle radius, at zp x relative to the carrier);
+                            the carrier averages them and the zp x line cancels. What remains
+                            (the model shows it) is the rectified part: where the misfit exceeds
+                            the elastic approach at the load, the disc turned toward its flank
+                            carries the load, TE ~ |d| -> a 2 zp x line (and 4 zp x ...) plus a
+                            mean shift toward less lost motion, even in A (A and -A, i.e. phi and
+                            phi + 180 deg, look alike), strongly falling with torque. Linear in
+                            (A cos 2 phi, A sin 2 phi) for the lines; the mean shift depends on
+                            A only, so the naming reads the lines alone (`dc_even`, diagnose.py).
+  crank_hole_position_error the same pattern of radial crank-hole position errors on both discs
+                            (Errors.crank_hole_position_um): the same 2 zp x signature, kept so the
+                            overlap is shown (DESIGN.md: never pretend to certainty)
   torsional_stiffness       kappa = 1/c - 1, c the factor on every FE stiffness (deflections at equal load
                             scale by 1/c, so TE is near linear in kappa; power-law contacts
                             F = k d^n get k c^n)
   backlash                  extra pin clearance [um] on the equidistant modification dRr (> 0 opens
                             backlash); reported as lost motion in arcmin via the model's own ratio
-Unit sizes are small against tolerances (1 um, 5 % stiffness): the library is a linearisation;
-extension.py refits on the full model.
+Unit sizes: 1 um coaxiality, 5 % stiffness, 2 um clearance (linear causes); 10 um for the crank
+patterns, a tolerance-class size: at 1 um the misfit stays inside the elastic approach of the
+loaded pins and the model answers ~0.01 arcsec (second order), so a 1 um secant would not
+represent the 5-20 um errors that matter. The library is a linearisation (a secant for the crank
+patterns); the extension (diagnose.py) refits on the full model.
 """
 from __future__ import annotations
 
@@ -43,12 +61,20 @@ def _coaxiality(case, stiffness, p):
                             output_coaxiality_phase_deg=float(np.degrees(np.angle(v)))), stiffness
 
 
+def crank_pattern_um(n_crank: int, p) -> np.ndarray:
+    """Per-crank values A cos(phi - 2 pi j / n) from p = (A cos 2 phi, A sin 2 phi) [um]."""
+    a, two_phi = float(np.hypot(p[0], p[1])), float(np.arctan2(p[1], p[0]))
+    return a * np.cos(0.5 * two_phi - 2 * np.pi * np.arange(n_crank) / n_crank)
+
+
 def _crank_ecc(case, stiffness, p):
-    return case.with_errors(crank_eccentricity_um=_per_crank(case, "crank_eccentricity_um", p)), stiffness
+    d = crank_pattern_um(case.carrier.crank_count, p)
+    return case.with_errors(crank_eccentricity_um=_per_crank(case, "crank_eccentricity_um", d)), stiffness
 
 
 def _crank_hole(case, stiffness, p):
-    return case.with_errors(crank_hole_position_um=_per_crank(case, "crank_hole_position_um", p)), stiffness
+    d = crank_pattern_um(case.carrier.crank_count, p)
+    return case.with_errors(crank_hole_position_um=_per_crank(case, "crank_hole_position_um", d)), stiffness
 
 
 def scale_stiffness(stiffness, factor: float):
@@ -84,17 +110,21 @@ class CauseSpec:
     unit: float                                  # finite-difference step, parameter units
     apply: Callable                              # (case, stiffness, p) -> (case, stiffness)
     mechanism: str                               # one line for the report
+    dc_even: bool = False                        # mean-TE response depends on |p| only (see above)
+
+
+CRANK_UNIT_UM = 10.0
 
 
 def cause_specs(case) -> tuple[CauseSpec, ...]:
-    n = case.carrier.crank_count
     return (
         CauseSpec("output_coaxiality", ("coaxiality_cos_um", "coaxiality_sin_um"), 1.0, _coaxiality,
                   "output mounted off-axis: the output encoder reads e/r sin(theta + phi)"),
-        CauseSpec("crank_eccentricity_error", tuple(f"crank{j + 1}_eccentricity_error_um" for j in range(n)),
-                  1.0, _crank_ecc, "crank eccentric radius differs from nominal"),
-        CauseSpec("crank_hole_position_error", tuple(f"crank{j + 1}_hole_position_error_um" for j in range(n)),
-                  1.0, _crank_hole, "crank hole of the disc off its nominal position"),
+        CauseSpec("crank_eccentricity_error", ("ecc_A_cos2phi_um", "ecc_A_sin2phi_um"), CRANK_UNIT_UM,
+                  _crank_ecc, "crank eccentric radii differ crank to crank (both discs' eccentrics)",
+                  dc_even=True),
+        CauseSpec("crank_hole_position_error", ("hole_A_cos2phi_um", "hole_A_sin2phi_um"), CRANK_UNIT_UM,
+                  _crank_hole, "crank holes of the discs off their nominal radial position", dc_even=True),
         CauseSpec("torsional_stiffness", ("compliance_factor_minus_1",), 0.05, _stiffness,
                   "the reducer is stiffer or softer than the FE model says"),
         CauseSpec("backlash", ("pin_clearance_um",), 2.0, _backlash,
