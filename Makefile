@@ -84,12 +84,17 @@ stage-diagnosis: $(foreach c,$(CASES),$(if $(RECORDS_$(c)),$(BUILD)/$(c)/diagnos
 $(BUILD)/%/diagnosis/diagnosis.json: cases/%.toml $(BUILD)/%/fem/stiffness.json $(SRC_diagnosis) $(SRC_dynamics) | $(STAMP)
 	$(RUN) diagnose --case $< $(STIFF) --measured $(RECORDS_$*) --out $(BUILD)/$*/diagnosis $(Q)
 
+# Paper 001's no-load bench case (RV-40E, i = 81) as a worked example of the coaxiality diagnosis.
+$(BUILD)/%/diagnosis/paper001.json: cases/%.toml $(BUILD)/%/fem/stiffness.json $(SRC_diagnosis) $(SRC_dynamics) | $(STAMP)
+	$(RUN) paper001 --case $< $(STIFF) --out $(BUILD)/$*/diagnosis $(Q)
+
 STAGES = geometry/profile.csv mesh/crankshaft_mesh.npz fem/stiffness.json matrix/te_std.csv hysteresis/hysteresis.json \
          fourbar/comparison.md tolerance/summary.json
 report: $(foreach c,$(CASES),$(BUILD)/$(c)/report/index.html)
 .SECONDEXPANSION:
 $(BUILD)/%/report/index.html: cases/%.toml $$(addprefix $(BUILD)/%/,$(STAGES)) \
-        $$(if $$(RECORDS_$$*),$(BUILD)/%/diagnosis/diagnosis.json) pipeline/report.py | $(STAMP)
+        $$(if $$(RECORDS_$$*),$(BUILD)/%/diagnosis/diagnosis.json) \
+        $$(if $$(filter rv40e-81,$$*),$(BUILD)/%/diagnosis/paper001.json) pipeline/report.py | $(STAMP)
 	$(RUN) report --case $< --build $(BUILD) $(Q)
 
 test: $(STAMP)

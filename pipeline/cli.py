@@ -24,6 +24,7 @@ COMMANDS = {
     "fourbar": ("pipeline.cmd_fourbar", "paper 000's four-bar original-error analysis"),
     "tolerance": ("pipeline.cmd_fourbar", "Monte Carlo tolerance analysis (local or Dask)"),
     "diagnose": ("pipeline.cmd_diagnose", "measured records -> causes, extension, gain"),
+    "paper001": ("pipeline.cmd_diagnose", "paper 001's no-load bench case: coaxiality that closes the gap"),
     "report": ("pipeline.cmd_report", "static HTML report of a case"),
 }
 

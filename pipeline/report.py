@@ -50,7 +50,8 @@ SECTIONS = (
             "All error sources drawn from their tolerance bands.", ("summary.json",)),
     Section("Diagnosis of measured data", "diagnosis",
             "Residual (measured - simulated) in time and orders, named causes, model extension and "
-            "its gain.", ("diagnosis.json",)),
+            "its gain; paper 001's no-load bench case as a worked example.",
+            ("diagnosis.json", "paper001.json")),
 )
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg")

@@ -80,3 +80,15 @@ def test_real_bench_records_name_coaxiality_and_stiffness():
     held = [r for r in recs if r.name in d.extension.held_out]
     assert len(held) == 2 and len({abs(r.torque_Nm) for r in held}) == 1
     assert d.extension.gain > 0.6 and d.extension.holdout_gain > 0.6
+
+
+def test_the_paper001_command_writes_the_worked_example(tmp_path):
+    case = load_case(ROOT / "cases" / "rv40e-81.toml")
+    stiff = tmp_path / "stiffness.json"
+    save(support.stiffness_for_tests(case), stiff)
+    assert main(["paper001", "--case", str(ROOT / "cases" / "rv40e-81.toml"), "--stiffness", str(stiff),
+                 "--out", str(tmp_path), "--quiet"]) == 0
+    ex = json.loads((tmp_path / "paper001.json").read_text())
+    # paper 001: 57.467 arcsec measured; the closing coaxiality can never exceed a pure 1x of that pp
+    assert ex["measured_arcsec"] == 57.467
+    assert 0 < ex["coaxiality_closing_um"] <= 57.467 / 2 / 206264.806 * 50e3 * 1.001
