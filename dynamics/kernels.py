@@ -26,8 +26,9 @@ G_R, G_RR, G_E, G_ZP, G_ND, G_NC = 0, 1, 2, 3, 4, 5
 G_KTA, G_NTA, G_CTA, G_KSUP, G_CSUP = 6, 7, 8, 9, 10
 G_KM, G_MVAR, G_MEPS, G_RB1, G_RB2, G_Z1, G_KTOR, G_BETA = 11, 12, 13, 14, 15, 16, 17, 18
 N_GEO = 19
-# crank table columns: axis radius, axis angle, eccentricity, hole radius, mesh phase offset
-C_A, C_B, C_ECC, C_H, C_PH = 0, 1, 2, 3, 4
+# crank table columns: axis radius, axis angle, eccentricity (both discs), hole radius, mesh phase
+# offset, extra eccentricity of disc 1's eccentric only (disc d's radius: C_ECC + (d == 0) C_DE1)
+C_A, C_B, C_ECC, C_H, C_PH, C_DE1 = 0, 1, 2, 3, 4, 5
 MESH_EDGE = 0.02   # smoothing width of the single/double contact edges [fraction of a pitch]
 # candidate pins in the time integration: a pin more than CANDIDATE_MARGIN_M open at a refresh is
 # skipped for the next CANDIDATE_REFRESH steps. The rigid-body gap rate is ~0.3 um/ms (13 um over
@@ -221,6 +222,8 @@ def _assemble(q, v, th_in, w_in, geo, pins, cranks, law, drot, tws, want_k,
         for j in range(nc):
             iu = 1 + nc + 2 * j
             a, b, ecc, hr = cranks[j, C_A], cranks[j, C_B], cranks[j, C_ECC], cranks[j, C_H]
+            if d == 0:
+                ecc += cranks[j, C_DE1]
             pe = q[1 + j] + math.pi * d
             ca, sa = math.cos(q[0] + b), math.sin(q[0] + b)
             ce, se = math.cos(pe), math.sin(pe)

@@ -30,7 +30,10 @@ eigenfrequency of the linearised model at rated torque, so the output torsional 
 exactly and stiffer local modes more (contact damping grows with frequency). Contacts cannot
 pull: damped contact forces are clipped at zero.
 Error sources (case.errors; zero = ideal):
-  crank_eccentricity_um    per crank: eccentric radius E + de_j (both eccentrics of the crank)
+  crank_eccentricity_um    per crank: eccentric radius E + de_j (both eccentrics of the crank);
+                           the two discs turn by equal and opposite amounts, the zp x line cancels
+  eccentric_error_um       per crank: extra radius of the eccentric under disc 1 only (one journal
+                           ground off size): disc 1 alone turns, a zp x line in the TE
   crank_hole_position_um   per crank: radial position of crank hole j on both discs
   output_bearing_hole_um   per crank: radial position of crank j's bearing seat in the carrier
   pin_radius_um, pin_circle_radius_um   all pins
@@ -83,7 +86,8 @@ class ReducerModel:
     stiffness: StiffnessModel
     geo: np.ndarray          # scalars, indices in dynamics.kernels (G_*)
     pins: np.ndarray         # (zp, 4) x [m], y [m], radius [m], angle [rad]
-    cranks: np.ndarray       # (nc, 5) axis radius, axis angle, eccentricity, hole radius, mesh phase
+    cranks: np.ndarray       # (nc, 6) axis radius, axis angle, eccentricity, hole radius, mesh phase,
+                             # extra eccentricity of disc 1 (columns kernels.C_*)
     law: np.ndarray          # (P, 3) pin phase [deg], k [N/m^n], n
     disc_rotation: np.ndarray  # (nd,) profile rotation in each disc's body frame [rad]
     mass: np.ndarray         # (n,) diagonal mass matrix [kg | kg m^2]
@@ -141,7 +145,8 @@ def build_model(case: ReducerCase, stiffness: StiffnessModel) -> ReducerModel:
         a + _per_crank(er.output_bearing_hole_um, nc), beta,
         cy.eccentricity_mm * mm + _per_crank(er.crank_eccentricity_um, nc),
         a + _per_crank(er.crank_hole_position_um, nc),
-        np.mod(s1.z1 * beta / (2 * np.pi), 1.0)])
+        np.mod(s1.z1 * beta / (2 * np.pi), 1.0),
+        _per_crank(er.eccentric_error_um, nc)])
     pc = stiffness.pin_contact
     law = np.column_stack([pc.position_deg, pc.law_k_N_per_m_pow, pc.law_n]).astype(float)
     drot = np.deg2rad(mod.rotation_deg) + np.pi * np.arange(nd)
@@ -264,11 +269,12 @@ def _rigid_pose(model: ReducerModel, input_rad: float, carrier_rad: float) -> np
     q[0] = carrier_rad
     phi = carrier_rad - s1.z1 / s1.z2 * (input_rad - carrier_rad)
     q[1:1 + nc] = phi
-    a, b, ecc, hr = (model.cranks[:, c] for c in (kn.C_A, kn.C_B, kn.C_ECC, kn.C_H))
+    a, b, ecc0, hr = (model.cranks[:, c] for c in (kn.C_A, kn.C_B, kn.C_ECC, kn.C_H))
     seat = a[:, None] * np.column_stack([np.cos(carrier_rad + b), np.sin(carrier_rad + b)])
     hole = hr[:, None] * np.column_stack([np.cos(b), np.sin(b)])       # disc frame, at rotation 0
     hc = hole.mean(axis=0)
     for d in range(model.n_disc):
+        ecc = ecc0 + (model.cranks[:, kn.C_DE1] if d == 0 else 0.0)
         X = seat + ecc[:, None] * np.array([math.cos(phi + math.pi * d), math.sin(phi + math.pi * d)])
         Xc = X.mean(axis=0)
         u, x = hole - hc, X - Xc
@@ -326,6 +332,12 @@ def _newton(model, input_rad, T, q0, tws, max_iter=100):
     return q, it, status
 
 
+def _on_branch(model: ReducerModel, th: float, q: np.ndarray) -> bool:
+    """Newton can land on the next tooth (the profile is periodic: the disc one pin pitch on is also
+    an equilibrium). Windup plus backlash stay far below a quarter pin pitch of output rotation."""
+    return abs(q[0] - th / model.ratio) < 0.25 * 2 * np.pi / model.case.cycloid.zp
+
+
 def _static(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0: np.ndarray | None,
             tws: np.ndarray, flank: int = +1) -> tuple[np.ndarray, int]:
     """Static equilibrium, robust by construction (see `solve_static`): returns (q, iterations)."""
@@ -340,18 +352,20 @@ def _static(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0: 
     if q0 is not None:                   # warm start (the caller's guess, e.g. the last solution)
         q, it, status = _newton(model, th, T, np.asarray(q0, float) - shift, tws)
         total += it
-        if status == 0:
+        if status == 0 and _on_branch(model, th, q):
             return q + shift, total
     qk = kinematic_q(model, th, flank)
     q, it, status = _newton(model, th, T, qk, tws)
     total += it
+    if status == 0 and not _on_branch(model, th, q):
+        status = 3                       # a neighbouring tooth's equilibrium: approach it gradually
     if status != 0:                      # torque continuation from the touching pose, adaptive
         q, frac, dfrac = qk, 0.0, 1.0 / 16
         for _ in range(CONTINUATION_MAX_SOLVES):
             nxt = min(1.0, frac + dfrac)
             qn, it, status = _newton(model, th, nxt * T if nxt < 1 else T, q, tws)
             total += it
-            if status == 0:
+            if status == 0 and _on_branch(model, th, qn):
                 q, frac, dfrac = qn, nxt, 2 * dfrac
                 if frac >= 1.0:
                     break

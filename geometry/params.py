@@ -115,7 +115,12 @@ class Dynamics:
 @dataclass(frozen=True)
 class Errors:
     """Manufacturing/assembly error sources; zero means ideal. Tuples are per crankshaft."""
-    crank_eccentricity_um: tuple = _f(-500.0, 500.0, default=(0.0,))
+    crank_eccentricity_um: tuple = _f(-500.0, 500.0, default=(0.0,))   # both eccentrics of crank j
+    # error of the eccentric under disc 1 only (e.g. a grinding error of one eccentric journal):
+    # disc 1's eccentric radius on crank j is E + crank_eccentricity_um[j] + eccentric_error_um[j],
+    # disc 2's stays E + crank_eccentricity_um[j]; unlike crank_eccentricity_um it does not cancel
+    # between the two discs and puts a line at the crankshaft order zp x in the TE
+    eccentric_error_um: tuple = _f(-500.0, 500.0, default=(0.0,))
     crank_hole_position_um: tuple = _f(-500.0, 500.0, default=(0.0,))
     output_bearing_hole_um: tuple = _f(-500.0, 500.0, default=(0.0,))
     pin_radius_um: float = _f(-500.0, 500.0, default=0.0)
@@ -223,7 +228,8 @@ def _check_value(f: dataclasses.Field, value: Any, where: str) -> Any:
 
 def _check_errors(case: ReducerCase) -> None:
     n = case.carrier.crank_count
-    for key in ("crank_eccentricity_um", "crank_hole_position_um", "output_bearing_hole_um"):
+    for key in ("crank_eccentricity_um", "eccentric_error_um", "crank_hole_position_um",
+                "output_bearing_hole_um"):
         v = getattr(case.errors, key)
         if len(v) not in (1, n):
             raise CaseError(f"{_where('errors', key, case.source)} = {list(v)}: give one value "

@@ -6,10 +6,12 @@ Records: forward/backward pairs at 3, 30 and 60 % of rated torque, one output re
 samples each; the 30 % pair is held out of the fit (hold-out rule of diagnose.py).
 Tolerances: parameters within 5 % of the drawn value (the noise moves them < 0.5 % on these lines;
 5 % leaves room for the model's nonlinearity between the unit signature and the drawn size).
-crank_eccentricity_error: its signature is pinned through the model here (the two discs cancel
-the zp x line, the rectified 2 zp x part remains); its blind fit is NOT among the seeded cases
-here yet (the threshold response gives the fit local minima, see bench.py); its statistics are
-covered in test_diagnose_machinery.py with a stand-in model.
+crank_eccentricity_error (one eccentric journal, disc 1, off by 4-10 um on a drawn crank): a zp x
+line of ~0.85 arcsec/um (tests/test_dynamics_static.py). Its records are at 10, 30 and 60 % rated
+(30 % held out): at 3 % rated the model adds a second-order part (2 zp x, a mean shift even in the
+error) that the linear library leaves to other causes (one trial: hold-out gain 0.59; not tested). Tolerances:
+the drawn crank exactly; the single-journal size within 10 % (the fit sees the zero-mean pattern
+through the line; the common part, disc 1's whole eccentricity, only through small mean shifts).
 """
 import numpy as np
 import pytest
@@ -24,23 +26,30 @@ support = pytest.importorskip("support", reason="tests/support.py (stiffness sta
 CASE = load_case(Path(__file__).parents[1] / "cases" / "rv40e-81.toml")
 STIFF = support.stiffness_for_tests(CASE)
 PPR = 256
-CASES = [(c, s) for c in ("output_coaxiality", "torsional_stiffness", "backlash") for s in range(4)]
+CASES = [(c, s) for c in ("output_coaxiality", "torsional_stiffness", "backlash") for s in range(4)] \
+    + [("crank_eccentricity_error", s) for s in range(3)]
 TRUTH_KEY = {"output_coaxiality": "output_coaxiality_um", "torsional_stiffness": "stiffness_factor",
-             "backlash": "pin_clearance_um"}
+             "backlash": "pin_clearance_um", "crank_eccentricity_error": "crank_eccentricity_error_single_um"}
+TORQUES = {"crank_eccentricity_error": (0.1, 0.3, 0.6)}
+REL_TOL = {"crank_eccentricity_error": 0.10}
 
 
-def _records(effects, seed):
-    return bench_records(quasi_static_te, CASE, STIFF, effects, seed=seed, samples_per_rev=PPR)
+def _records(effects, seed, torque_fractions=(0.03, 0.3, 0.6)):
+    return bench_records(quasi_static_te, CASE, STIFF, effects, seed=seed, samples_per_rev=PPR,
+                         torque_fractions=torque_fractions)
 
 
 @pytest.mark.parametrize("cause,seed", CASES)
 def test_the_model_finds_a_hidden_effect_blind(cause, seed):
     eff = draw_effect(np.random.default_rng(100 + seed), CASE, cause)
-    d = diagnose(CASE, STIFF, _records([eff], 100 + seed), points_per_rev=PPR)
+    d = diagnose(CASE, STIFF, _records([eff], 100 + seed, TORQUES.get(cause, (0.03, 0.3, 0.6))),
+                 points_per_rev=PPR)
     assert d.cause == cause, [(f.cause, f.score) for f in d.findings]
     assert d.extension.gain >= 0.6 and d.extension.holdout_gain >= 0.6
     key = TRUTH_KEY[cause]
-    assert d.extension.parameters[key] == pytest.approx(eff.truth[key], rel=0.05)
+    assert d.extension.parameters[key] == pytest.approx(eff.truth[key], rel=REL_TOL.get(cause, 0.05))
+    if cause == "crank_eccentricity_error":
+        assert d.extension.parameters["crank_eccentricity_error_crank"] == eff.truth["crank_eccentricity_error_crank"]
     if cause == "output_coaxiality":
         assert d.extension.parameters["output_coaxiality_phase_deg"] == pytest.approx(
             eff.truth["output_coaxiality_phase_deg"], abs=2.0)
@@ -60,7 +69,8 @@ def test_coaxiality_and_softer_reducer_together_give_two_findings():
     assert d.extension.gain >= 0.6
 
 
-def test_a_crank_misfit_shows_at_twice_the_crankshaft_order_even_in_its_size():
+def test_both_eccentrics_of_a_crank_misfit_show_at_twice_the_crankshaft_order_even_in_its_size():
+    # crank_eccentricity_um (both discs' eccentrics; the crank_hole_position_error signature's shape)
     from pipeline.diagnosis.orders import spectrum_of
     from pipeline.diagnosis.signatures import crank_pattern_um
     zp, T = CASE.cycloid.zp, 0.03 * CASE.rated_torque_Nm

@@ -3,7 +3,8 @@
 The stand-in `toy_te` is NOT the project's model: it is a transparent TE formula with one term per
 cause (wind-up T/K, lost motion from the equidistant clearance, coaxiality e/r sin(theta + phi),
 rectified per-crank misfits |sum_j de_j sin(zp theta + 2 pi j / n)| (2 zp x lines and a mean shift,
-even in the error, as the two-disc model answers), a load-dependent zp x baseline), so these tests check
+even in the error, as the two-disc model answers), a linear zp x line per um of disc-1 eccentric
+error (eccentric_error_um, the crank_eccentricity_error cause), a load-dependent zp x baseline), so these tests check
 the statistics and fitting (grouping, significance, selection, extension, hold-out, confidence
 intervals) independently of the dynamics solver. Blind diagnosis through the real model is in
 test_diagnose_bench.py.
@@ -43,9 +44,12 @@ def toy_te(case, stiffness, ang, torque, direction):
     # of the two discs cancel, the rectified part |d| remains, toward less lost motion
     x = 2 * np.pi * np.arange(n) / n
     de = np.broadcast_to(np.asarray(er.crank_eccentricity_um, float), (n,))
+    ee = np.broadcast_to(np.asarray(er.eccentric_error_um, float), (n,))
     dh = np.broadcast_to(np.asarray(er.crank_hole_position_um, float), (n,))
     te = te + direction * 2.0 * np.abs(np.sin(zp * th[:, None] + x) @ de)
     te = te + direction * 1.5 * np.abs(np.sin(zp * th[:, None] + x + 0.2) @ dh)
+    # an eccentric of disc 1 alone (eccentric_error_um): a linear zp x line, ~0.85 arcsec/um as the model
+    te = te + 0.85 * (np.sin(zp * th[:, None] + x) @ ee)
     return te + (1.0 + np.abs(T) / 1000.0) * np.sin(zp * th)
 
 

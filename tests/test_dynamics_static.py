@@ -139,3 +139,38 @@ def test_the_last_revolution_window_spans_exactly_360_deg_of_output_travel():
                      te_arcsec=te, teeth_in_contact=np.zeros((len(t), 2), int))
     with pytest.raises(ResultError, match="360"):
         short.last_revolution()
+
+
+def test_an_eccentric_error_of_one_disc_shows_at_the_crankshaft_order_and_both_eccentrics_cancel():
+    # Errors.eccentric_error_um moves disc 1's eccentric only: disc 1 turns against disc 2 once per
+    # crank revolution -> a zp x (40x) TE line, linear in the error. crank_eccentricity_um moves both
+    # eccentrics of the crank (180 deg apart): the discs turn +d and -d and the zp x line cancels.
+    # Measured (RV-40E stand-in stiffness, 256 points per output rev): 0.846 arcsec per um at 30 %
+    # rated for 1, 5, 10 um (4.23, 8.35 arcsec; within 1.5 % of linear), the same at 60 % rated and
+    # 0.85-0.96 per um at 3 % rated; both-eccentrics 5 um: 40x 0.002 arcsec.
+    # Tolerances: 0.75-0.95 arcsec per um; linearity 5 %; cancellation < 2 % of the one-disc line.
+    from pipeline.diagnosis.orders import spectrum_of
+    base = model_for_tests("rv40e-81")
+    case = base.case
+    zp, T = case.cycloid.zp, 0.3 * case.rated_torque_Nm
+    ang = np.linspace(0.0, 360.0 * case.ratio, 257)
+    te0 = quasi_static(base, ang, T).te_arcsec
+
+    def line(**err):
+        te = quasi_static(model_for_tests("rv40e-81", **err), ang, T).te_arcsec
+        return spectrum_of(ang / case.ratio, te - te0).at(zp)
+
+    l1, l5 = line(eccentric_error_um=[1.0, 0.0, 0.0]), line(eccentric_error_um=[5.0, 0.0, 0.0])
+    assert 0.75 < l1 < 0.95
+    assert l5 == pytest.approx(5.0 * l1, rel=0.05)
+    assert line(crank_eccentricity_um=[5.0, 0.0, 0.0]) < 0.02 * l5
+
+
+def test_the_static_solve_never_lands_on_the_neighbouring_tooth():
+    # regression: with -5.15 um on crank 1, Newton from the touching pose converged one pin pitch on
+    # (TE -32068 arcsec = 9 deg - windup) at 45 % rated; the answer must lie between the neighbours'
+    # windups at 40 % and 50 % (monotone windup), far from a pin pitch (32400 arcsec)
+    m = model_for_tests("rv40e-81", crank_eccentricity_um=[-5.15, 0, 0])
+    rated = m.case.rated_torque_Nm
+    te = [solve_static(m, 0.0, f * rated).te_arcsec for f in (0.40, 0.45, 0.50)]
+    assert te[0] > te[1] > te[2] > -200.0

@@ -10,6 +10,7 @@ Flow (pure kernels, I/O at the edges):
   -> extension.extend (named causes -> model parameters, re-simulate, gain, holdout gain)
   -> report.write_report (diagnosis.json + off-screen index.html).
 
-Cause ids: output_coaxiality, crank_eccentricity_error, crank_hole_position_error (shares the zp x
-signature with crank eccentricity: reported as ambiguous), torsional_stiffness, backlash.
+Cause ids: output_coaxiality, crank_eccentricity_error (disc-1 eccentric error: a zp x line; its
+evidence warns that a one-disc tooth or crank-hole pattern error shares that order),
+crank_hole_position_error (both discs: 2 zp x), torsional_stiffness, backlash.
 """

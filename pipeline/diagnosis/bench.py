@@ -8,13 +8,10 @@ the loader would (write them with `write_records` to test the CLI). Truth is kep
 records in `HiddenEffect.truth`, in the units diagnosis.json reports.
 Sizes drawn (a tolerance-class error, well above the noise):
   output_coaxiality         e in [5, 25] um, phase in [-180, 180) deg
-  crank_eccentricity_error  de_j = A cos(phi - 2 pi j / n_crank), A in [6, 12] um, phi in [0, 180)
-                            deg (zero mean; a common change is a change of E). Large on purpose:
-                            the model answers a crank misfit only where it exceeds the elastic
-                            approach of the loaded pins (signatures.py): ~0.01 arcsec at 1 um,
-                            6-10 arcsec (2 zp x) at 5-10 um and 3 % rated torque (RV-40E). Capped
-                            at 12 um: beyond it the light-load response falls again (20 um: 6.3
-                            arcsec) and the fit has local minima (a known limit, not tested).
+  crank_eccentricity_error  one eccentric journal off size: disc 1's eccentric on one crank j
+                            (uniform over the cranks) by e, |e| in [4, 10] um, either sign
+                            (Errors.eccentric_error_um); the model answers a zp x line of ~0.85
+                            arcsec per um (RV-40E, signatures.py), 3.4-8.5 arcsec here.
   torsional_stiffness       factor c in [0.55, 0.8] or [1.3, 1.8] on every FE stiffness
   backlash                  extra pin clearance in [4, 12] um (equidistant modification)
 """
@@ -25,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.diagnosis.signatures import _backlash, _coaxiality, _crank_ecc, _stiffness, crank_pattern_um
+from pipeline.diagnosis.signatures import _backlash, _coaxiality, _eccentric, _stiffness, eccentric_pattern
 from pipeline.records import BenchRecord, write_record
 
 CAUSES = ("output_coaxiality", "crank_eccentricity_error", "torsional_stiffness", "backlash")
@@ -44,12 +41,15 @@ def draw_effect(rng: np.random.Generator, case, cause: str) -> HiddenEffect:
         return HiddenEffect(cause, (e * np.cos(np.radians(ph)), e * np.sin(np.radians(ph))),
                             {"output_coaxiality_um": e, "output_coaxiality_phase_deg": ph})
     if cause == "crank_eccentricity_error":
-        a, ph = rng.uniform(6.0, 12.0), rng.uniform(0.0, 180.0)
-        p = (a * np.cos(np.radians(2 * ph)), a * np.sin(np.radians(2 * ph)))
-        return HiddenEffect(cause, p, {"crank_eccentricity_error_amplitude_um": a,
-                                       "crank_eccentricity_error_phase_deg": ph,
-                                       "crank_eccentricity_error_um": list(
-                                           crank_pattern_um(case.carrier.crank_count, p))})
+        n = case.carrier.crank_count
+        j, e = int(rng.integers(n)), rng.uniform(4.0, 10.0) * (1.0 if rng.random() < 0.5 else -1.0)
+        p = np.zeros(n)
+        p[j] = e
+        a, ph, _ = eccentric_pattern(p)
+        return HiddenEffect(cause, tuple(float(v) for v in p), {
+            "crank_eccentricity_error_um": [float(v) for v in p], "crank_eccentricity_error_crank": j + 1,
+            "crank_eccentricity_error_single_um": float(e), "crank_eccentricity_error_amplitude_um": a,
+            "crank_eccentricity_error_phase_deg": ph})
     if cause == "torsional_stiffness":
         c = rng.uniform(0.55, 0.8) if rng.random() < 0.5 else rng.uniform(1.3, 1.8)
         return HiddenEffect(cause, (1.0 / c - 1.0,), {"stiffness_factor": c})
@@ -59,7 +59,7 @@ def draw_effect(rng: np.random.Generator, case, cause: str) -> HiddenEffect:
     raise ValueError(f"cause {cause!r}: allowed {', '.join(CAUSES)}")
 
 
-_APPLY = {"output_coaxiality": _coaxiality, "crank_eccentricity_error": _crank_ecc,
+_APPLY = {"output_coaxiality": _coaxiality, "crank_eccentricity_error": _eccentric,
           "torsional_stiffness": _stiffness, "backlash": _backlash}
 
 

@@ -16,6 +16,7 @@ evidence the records hold (e.g. one torque level cannot tell wind-up from lost m
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,8 @@ from scipy import optimize, stats
 from pipeline.diagnosis.features import FeatureMap
 from pipeline.diagnosis.fit import CauseColumns, MatchResult, match, reduce_columns
 from pipeline.diagnosis.orders import spectrum_of
-from pipeline.diagnosis.signatures import (SignatureSummary, cause_specs, crank_pattern_um, signature_columns,
+from pipeline.diagnosis.signatures import (SignatureSummary, cause_specs, crank_pattern_um,
+                                           signature_columns,
                                            summarise)
 from pipeline.diagnosis.significance import Line, test_lines
 from pipeline.diagnosis.simulate import TEModel, quasi_static_te, simulate_record
@@ -365,7 +367,28 @@ def _parameters(case, stiffness, chosen, cause_cols, z, cov_z, tq, te_model) -> 
             e, e_ci, ph, ph_ci = _polar(p, cp, tq)
             out.update({"output_coaxiality_um": e, "output_coaxiality_um_ci95": e_ci,
                         "output_coaxiality_phase_deg": ph, "output_coaxiality_phase_deg_ci95": ph_ci})
-        elif c in ("crank_eccentricity_error", "crank_hole_position_error"):
+        elif c == "crank_eccentricity_error":
+            # p = per-crank errors of disc 1's eccentric [um]; the zp x line measures the zero-mean
+            # pattern A cos(phi - 2 pi j / n) (phi: crank j at 360 j / n deg); a single journal off
+            # by e on crank j reads A = 2 |e| / n at phi = 360 j / n (e > 0) or + 180 (e < 0)
+            n = len(p)
+            out[f"{c}_um"] = [float(v) for v in p]
+            out[f"{c}_um_ci95"] = [_ci(float(v), float(s), tq) for v, s in zip(p, sd)]
+            Z = 2.0 / n * np.exp(1j * 2 * np.pi * np.arange(n) / n)
+            Z = Z - Z.mean()
+            M = np.vstack([Z.real, Z.imag])                  # (Re z, Im z) = M p
+            a, a_ci, ph, ph_ci = _polar(M @ p, M @ cp @ M.T, tq)
+            out[f"{c}_amplitude_um"] = a
+            out[f"{c}_amplitude_um_ci95"] = a_ci
+            out[f"{c}_phase_deg"] = ph
+            out[f"{c}_phase_deg_ci95"] = ph_ci
+            # single-journal reading: the crank and sign whose phase is nearest phi
+            cand = [(j, sg) for j in range(n) for sg in (1.0, -1.0)]
+            dist = [abs(math.remainder(ph - 360.0 * j / n - (0.0 if sg > 0 else 180.0), 360.0)) for j, sg in cand]
+            j, sg = cand[int(np.argmin(dist))]
+            out[f"{c}_crank"] = j + 1
+            out[f"{c}_single_um"] = sg * a * n / 2.0
+        elif c == "crank_hole_position_error":
             # p = (A cos 2 phi, A sin 2 phi): A and phi (mod 180 deg: A, -A look alike)
             a, a_ci, two_ph, two_ph_ci = _polar(p, cp, tq)
             out[f"{c}_amplitude_um"] = a
@@ -401,7 +424,19 @@ def _evidence(sel, case, records, groups, resid, lines, summaries, result) -> st
         return (f"{pfx}a once-per-output-revolution residual line of {a1} arcsec at {tq} N.m "
                 f"(about the same at every torque) matches the model's coaxiality signature "
                 f"(orders {list(summ.orders)[:3]}, load-independent); no other source puts a 1x line there.")
-    if c in ("crank_eccentricity_error", "crank_hole_position_error"):
+    if c == "crank_eccentricity_error":
+        zp = case.cycloid.zp
+        amps = [(abs(rec.torque_Nm), spectrum_of(rec.output_angle_deg, r).at(zp)) for rec, r in zip(records, resid)]
+        atxt = ", ".join(f"{a:.2f} at {t:g} N.m" for t, a in sorted(amps))
+        alt = (f"; {', '.join(a for a, _ in sel.alternatives)} fits the same lines about as well (the "
+               f"records cannot separate them)") if sel.alternatives else ""
+        return (f"{pfx}residual line at the crankshaft order zp = {zp}x ({atxt} arcsec, about the same "
+                f"at every torque, unlike a stiffness effect): the model's signature of an eccentric of "
+                f"one crankshaft off its radius, which turns one disc against the other once per crank "
+                f"revolution (orders {list(summ.orders)[:4]}). Caution: zp x is also the order of a "
+                f"disc-tooth or crank-hole pattern error of one disc (and of the crank bearings); the "
+                f"order alone does not separate them, the crank-to-crank phase and a teardown do{alt}.")
+    if c == "crank_hole_position_error":
         zp = case.cycloid.zp
         amps = [(abs(rec.torque_Nm), spectrum_of(rec.output_angle_deg, r).at(2 * zp)) for rec, r in zip(records, resid)]
         atxt = ", ".join(f"{a:.2f} at {t:g} N.m" for t, a in sorted(amps))
@@ -409,8 +444,9 @@ def _evidence(sel, case, records, groups, resid, lines, summaries, result) -> st
                f"records cannot separate them)") if sel.alternatives else ""
         return (f"{pfx}residual line at twice the crankshaft order, 2 zp = {2 * zp}x ({atxt} arcsec, "
                 f"falling with torque) with a shift toward less lost motion: the model's signature of "
-                f"a crank-to-crank misfit (the two discs, 180 deg apart, cancel the zp x line; the "
-                f"rectified part remains; orders {list(summ.orders)[:4]}){alt}.")
+                f"a crank-hole position pattern on both discs (the two discs, 180 deg apart, cancel the "
+                f"zp x line; the rectified part remains; orders {list(summ.orders)[:4]}); an eccentric "
+                f"or disc-tooth error of one disc would show at zp x instead{alt}.")
     gaps = _pair_gaps(records, groups, resid)
     gtxt = ", ".join(f"{g:+.1f} arcsec at {t:g} N.m" for t, g in gaps) or "no forward/backward pair"
     if c == "torsional_stiffness":

@@ -8,34 +8,35 @@ orders, harmonic pattern, load and direction dependence all come from the model,
 Causes and their parameters (DESIGN.md ids):
   output_coaxiality         (e cos phi, e sin phi) [um]: the mounting offset e at phase phi, read by
                             the output encoder as e/r sin(theta_out + phi) (dynamics.model)
-  crank_eccentricity_error  (A cos 2 phi, A sin 2 phi) [um]: the zero-mean per-crank pattern
-                            de_j = A cos(phi - 2 pi j / n_crank) of eccentric-radius errors
-                            (Errors.crank_eccentricity_um; the common part is a change of E,
-                            i.e. of the pin clearance, covered by `backlash`). Why 2 phi: each
-                            crank carries the eccentrics of BOTH discs, 180 deg apart, so the
-                            misfit rotates the two discs by +d and -d (d = A / (2 a) sin(zp theta
-                            + phi), a the crank circle radius, at zp x relative to the carrier);
-                            the carrier averages them and the zp x line cancels. What remains
-                            (the model shows it) is the rectified part: where the misfit exceeds
-                            the elastic approach at the load, the disc turned toward its flank
-                            carries the load, TE ~ |d| -> a 2 zp x line (and 4 zp x ...) plus a
-                            mean shift toward less lost motion, even in A (A and -A, i.e. phi and
-                            phi + 180 deg, look alike), strongly falling with torque. Linear in
-                            (A cos 2 phi, A sin 2 phi) for the lines; the mean shift depends on
-                            A only, so the naming reads the lines alone (`dc_even`, diagnose.py).
-  crank_hole_position_error the same pattern of radial crank-hole position errors on both discs
-                            (Errors.crank_hole_position_um): the same 2 zp x signature, kept so the
-                            overlap is shown (DESIGN.md: never pretend to certainty)
+  crank_eccentricity_error  (e_1 .. e_n) [um]: per crank, the radius error of the eccentric under
+                            disc 1 only (Errors.eccentric_error_um; e.g. one journal ground off
+                            size). Disc 1 alone is displaced, so it turns against disc 2 by a
+                            misfit at the crankshaft order: a zp x line (the model, RV-40E on the
+                            tests' stand-in stiffness: 0.85 arcsec per um, linear, nearly
+                            torque-independent; 2 zp x and a mean shift, even in e, only at light
+                            load, so it stays `dc_even`: named on its lines, refitted in the loop).
+                            The line's complex amplitude is linear in the e_j with a crank-dependent phase (crank j at
+                            360 j / n deg), so the zero-mean pattern e_j - mean(e) = A cos(phi -
+                            2 pi j / n) is what the line measures (amplitude A, phase phi: which
+                            crank); the common part (disc 1's whole eccentricity) has no line and
+                            is read from the mean shifts alone. Why not Errors.crank_eccentricity_um:
+                            it changes BOTH eccentrics of a crank (180 deg apart), the two discs
+                            turn by +d and -d, the zp x line cancels in the carrier and only a
+                            rectified 2 zp x threshold response remains, unlike real benches.
+  crank_hole_position_error (A cos 2 phi, A sin 2 phi) [um]: the zero-mean pattern de_j = A cos(phi
+                            - 2 pi j / n_crank) of radial crank-hole position errors on both discs
+                            (Errors.crank_hole_position_um): both discs, so the zp x line cancels
+                            and the rectified 2 zp x part remains (even in A, hence 2 phi).
   torsional_stiffness       kappa = 1/c - 1, c the factor on every FE stiffness (deflections at equal load
                             scale by 1/c, so TE is near linear in kappa; power-law contacts
                             F = k d^n get k c^n)
   backlash                  extra pin clearance [um] on the equidistant modification dRr (> 0 opens
                             backlash); reported as lost motion in arcmin via the model's own ratio
-Unit sizes: 1 um coaxiality, 5 % stiffness, 2 um clearance (linear causes); 10 um for the crank
-patterns, a tolerance-class size: at 1 um the misfit stays inside the elastic approach of the
-loaded pins and the model answers ~0.01 arcsec (second order), so a 1 um secant would not
-represent the 5-20 um errors that matter. The library is a linearisation (a secant for the crank
-patterns); the extension (diagnose.py) refits on the full model.
+Unit sizes: 1 um coaxiality, 5 % stiffness, 2 um clearance, 2 um eccentric error (linear causes);
+10 um for the crank-hole pattern, a tolerance-class size: at 1 um that misfit stays inside the
+elastic approach of the loaded pins and the model answers ~0.01 arcsec (second order), so a 1 um
+secant would not represent the 5-20 um errors that matter. The library is a linearisation (a
+secant for the crank patterns); the extension (diagnose.py) refits on the full model.
 """
 from __future__ import annotations
 
@@ -67,9 +68,19 @@ def crank_pattern_um(n_crank: int, p) -> np.ndarray:
     return a * np.cos(0.5 * two_phi - 2 * np.pi * np.arange(n_crank) / n_crank)
 
 
-def _crank_ecc(case, stiffness, p):
-    d = crank_pattern_um(case.carrier.crank_count, p)
-    return case.with_errors(crank_eccentricity_um=_per_crank(case, "crank_eccentricity_um", d)), stiffness
+def eccentric_pattern(values_um) -> tuple[float, float, float]:
+    """(A, phi [deg], mean) of per-crank values v_j = mean + A cos(phi - 2 pi j / n): the part the
+    zp x line of a disc-1 eccentric error measures (A, phi) and the common part (mean)."""
+    v = np.asarray(values_um, float)
+    n = len(v)
+    z = 2.0 / n * np.sum((v - v.mean()) * np.exp(1j * 2 * np.pi * np.arange(n) / n))
+    return float(abs(z)), float(np.degrees(np.angle(z))), float(v.mean())
+
+
+def _eccentric(case, stiffness, p):
+    """p: per-crank errors [um] of disc 1's eccentric (added to Errors.eccentric_error_um)."""
+    d = np.asarray(p, float)
+    return case.with_errors(eccentric_error_um=_per_crank(case, "eccentric_error_um", d)), stiffness
 
 
 def _crank_hole(case, stiffness, p):
@@ -114,15 +125,18 @@ class CauseSpec:
 
 
 CRANK_UNIT_UM = 10.0
+ECCENTRIC_UNIT_UM = 2.0
 
 
 def cause_specs(case) -> tuple[CauseSpec, ...]:
     return (
         CauseSpec("output_coaxiality", ("coaxiality_cos_um", "coaxiality_sin_um"), 1.0, _coaxiality,
                   "output mounted off-axis: the output encoder reads e/r sin(theta + phi)"),
-        CauseSpec("crank_eccentricity_error", ("ecc_A_cos2phi_um", "ecc_A_sin2phi_um"), CRANK_UNIT_UM,
-                  _crank_ecc, "crank eccentric radii differ crank to crank (both discs' eccentrics)",
-                  dc_even=True),
+        CauseSpec("crank_eccentricity_error",
+                  tuple(f"eccentric_error_crank{j + 1}_um" for j in range(case.carrier.crank_count)),
+                  ECCENTRIC_UNIT_UM, _eccentric,
+                  "an eccentric of a crankshaft off its radius (disc 1's journal): the disc turns "
+                  "at the crankshaft order", dc_even=True),
         CauseSpec("crank_hole_position_error", ("hole_A_cos2phi_um", "hole_A_sin2phi_um"), CRANK_UNIT_UM,
                   _crank_hole, "crank holes of the discs off their nominal radial position", dc_even=True),
         CauseSpec("torsional_stiffness", ("compliance_factor_minus_1",), 0.05, _stiffness,
