@@ -424,12 +424,16 @@ def _evidence(sel, case, records, groups, resid, lines, summaries, result) -> st
         return (f"{pfx}a once-per-output-revolution residual line of {a1} arcsec at {tq} N.m "
                 f"(about the same at every torque) matches the model's coaxiality signature "
                 f"(orders {list(summ.orders)[:3]}, load-independent); no other source puts a 1x line there.")
+    zp = case.cycloid.zp
+
+    def line_by_torque(order: float) -> str:
+        amps = [(abs(rec.torque_Nm), spectrum_of(rec.output_angle_deg, r).at(order))
+                for rec, r in zip(records, resid)]
+        return ", ".join(f"{a:.2f} at {t:g} N.m" for t, a in sorted(amps))
+    alt = (f"; {', '.join(a for a, _ in sel.alternatives)} fits the same lines about as well (the "
+           f"records cannot separate them)") if sel.alternatives else ""
     if c == "crank_eccentricity_error":
-        zp = case.cycloid.zp
-        amps = [(abs(rec.torque_Nm), spectrum_of(rec.output_angle_deg, r).at(zp)) for rec, r in zip(records, resid)]
-        atxt = ", ".join(f"{a:.2f} at {t:g} N.m" for t, a in sorted(amps))
-        alt = (f"; {', '.join(a for a, _ in sel.alternatives)} fits the same lines about as well (the "
-               f"records cannot separate them)") if sel.alternatives else ""
+        atxt = line_by_torque(zp)
         return (f"{pfx}residual line at the crankshaft order zp = {zp}x ({atxt} arcsec, about the same "
                 f"at every torque, unlike a stiffness effect): the model's signature of an eccentric of "
                 f"one crankshaft off its radius, which turns one disc against the other once per crank "
@@ -437,11 +441,7 @@ def _evidence(sel, case, records, groups, resid, lines, summaries, result) -> st
                 f"disc-tooth or crank-hole pattern error of one disc (and of the crank bearings); the "
                 f"order alone does not separate them, the crank-to-crank phase and a teardown do{alt}.")
     if c == "crank_hole_position_error":
-        zp = case.cycloid.zp
-        amps = [(abs(rec.torque_Nm), spectrum_of(rec.output_angle_deg, r).at(2 * zp)) for rec, r in zip(records, resid)]
-        atxt = ", ".join(f"{a:.2f} at {t:g} N.m" for t, a in sorted(amps))
-        alt = (f"; {', '.join(a for a, _ in sel.alternatives)} fits the same lines about as well (the "
-               f"records cannot separate them)") if sel.alternatives else ""
+        atxt = line_by_torque(2 * zp)
         return (f"{pfx}residual line at twice the crankshaft order, 2 zp = {2 * zp}x ({atxt} arcsec, "
                 f"falling with torque) with a shift toward less lost motion: the model's signature of "
                 f"a crank-hole position pattern on both discs (the two discs, 180 deg apart, cancel the "
