@@ -324,6 +324,14 @@ def _assemble(q, v, th_in, w_in, geo, pins, cranks, law, drot, tws, want_k,
 
 
 @njit(cache=True)
+def _buffers(n, nd, nc, zp):
+    """Output buffers of `assemble`: force, stiffness, damping, pin forces and gaps, bearing and
+    mesh forces (one allocation per solve, reused by every iteration)."""
+    return (np.zeros(n), np.zeros((n, n)), np.zeros((n, n)), np.zeros((nd, zp)), np.zeros((nd, zp)),
+            np.zeros((nd, nc, 2)), np.zeros(nc))
+
+
+@njit(cache=True)
 def static_solve(q, th_in, torque, geo, pins, cranks, law, drot, tws, scale, max_iter, tol_N):
     """Static equilibrium: minimise the potential Pi = V(q) + torque q0 (frictionless couplings
     are conservative) by a Levenberg-Marquardt-damped Newton in scaled coordinates x = scale q
@@ -334,13 +342,7 @@ def static_solve(q, th_in, torque, geo, pins, cranks, law, drot, tws, scale, max
     n = q.shape[0]
     nd, nc, zp = int(geo[G_ND]), int(geo[G_NC]), pins.shape[0]
     v = np.zeros(n)
-    f = np.zeros(n)
-    K = np.zeros((n, n))
-    C = np.zeros((n, n))
-    pf = np.zeros((nd, zp))
-    pg = np.zeros((nd, zp))
-    br = np.zeros((nd, nc, 2))
-    mf = np.zeros(nc)
+    f, K, C, pf, pg, br, mf = _buffers(n, nd, nc, zp)
     geo0 = geo.copy()
     geo0[G_BETA] = 0.0
     V, _, ok = assemble(q, v, th_in, 0.0, geo0, pins, cranks, law, drot, tws, True, f, K, C, pf, pg, br, mf)
@@ -453,14 +455,8 @@ def integrate(q, v, Mdiag, th_arr, w_arr, T_arr, dt, stride, alpha, geo, pins, c
     n = q.shape[0]
     nd, nc, zp = int(geo[G_ND]), int(geo[G_NC]), pins.shape[0]
     nsteps = th_arr.shape[0] - 1
-    f = np.zeros(n)
-    K = np.zeros((n, n))
-    C = np.zeros((n, n))
+    f, K, C, pf, pg, br, mf = _buffers(n, nd, nc, zp)
     J = np.zeros((n, n))
-    pf = np.zeros((nd, zp))
-    pg = np.zeros((nd, zp))
-    br = np.zeros((nd, nc, 2))
-    mf = np.zeros(nc)
     active = np.ones((nd, zp), np.bool_)
     V, tau, ok = assemble(q, v, th_arr[0], w_arr[0], geo, pins, cranks, law, drot, tws, False,
                           f, K, C, pf, pg, br, mf)
