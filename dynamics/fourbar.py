@@ -37,9 +37,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from geometry.artifacts import InputError
+from dynamics.results import ARCSEC_PER_RAD
 from geometry.params import ReducerCase
-
-ARCSEC_PER_RAD = 180.0 / math.pi * 3600.0
 
 # Paper 000's tables (seeds/000_eca208c918471efb.txt): ranges as printed, "deg".
 PAPER_000 = {

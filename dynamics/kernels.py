@@ -136,7 +136,6 @@ def _assemble(q, v, th_in, w_in, geo, pins, cranks, law, drot, tws, want_k,
               f, K, C, pin_f, pin_g, bear, mesh_f, active):
     """`assemble` restricted to the pins where active[d, k] (the others are known to be open:
     pin_f = 0, pin_g left as it was)."""
-    n = q.shape[0]
     nd, nc = int(geo[G_ND]), int(geo[G_NC])
     zp = geo[G_ZP]
     beta = geo[G_BETA]

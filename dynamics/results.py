@@ -14,7 +14,8 @@ import numpy as np
 from dynamics.spectrum import OrderSpectrum, order_spectrum
 from geometry.artifacts import InputError
 
-ARCSEC_PER_DEG = 3600.0
+ARCSEC_PER_DEG = 3600.0                        # TE is reported in arcsec (DESIGN.md)
+ARCSEC_PER_RAD = 180.0 / np.pi * ARCSEC_PER_DEG  # 206264.806...
 
 
 class ResultError(InputError):

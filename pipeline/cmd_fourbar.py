@@ -24,7 +24,6 @@ from dynamics import tolerance as tol
 from geometry.artifacts import InputError, write_json_atomic, write_text_atomic
 from geometry.params import ReducerCase, load_case
 
-ARCSEC_PER_DEG = 3600.0
 LABELS = {"eccentricity": "crank eccentricity (l1, crank A)", "crank_hole": "disc crank-hole spacing (l2)",
           "output_hole": "output bearing-hole spacing (l4)",
           "eccentricity_common": "crank eccentricity, both cranks (l1 = l3)"}

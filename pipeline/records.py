@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dynamics.results import ARCSEC_PER_DEG
 from geometry.artifacts import InputError, atomic_path
 
 COLUMNS = ("time_s", "input_angle_deg", "output_angle_deg", "output_torque_Nm")
@@ -106,7 +107,7 @@ class BenchRecord:
 
     def te_arcsec(self, ratio: float) -> np.ndarray:
         """Transmission error theta_out - theta_in / i (arcsec, positive = output ahead)."""
-        return (self.output_angle_deg - self.input_angle_deg / ratio) * 3600.0
+        return (self.output_angle_deg - self.input_angle_deg / ratio) * ARCSEC_PER_DEG
 
 
 def parse_column_map(text: str) -> dict[str, str | int]:

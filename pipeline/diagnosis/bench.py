@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from dynamics.results import ARCSEC_PER_DEG
 from pipeline.diagnosis.signatures import _backlash, _coaxiality, _eccentric, _stiffness, eccentric_pattern
 from pipeline.records import BenchRecord, write_record
 
@@ -89,7 +90,7 @@ def bench_records(te_model, case, stiffness, effects, *, seed: int,
             te = te_model(hidden_case, hidden_stiff, th_in, d * T, d)
             te = te + zero + rng.normal(0.0, noise_arcsec, te.shape)
             a_in = np.round(th_in / q) * q
-            a_out = np.round((th_in / case.ratio + te / 3600.0) / q) * q
+            a_out = np.round((th_in / case.ratio + te / ARCSEC_PER_DEG) / q) * q
             t = np.abs(th_in - th_in[0]) / (6.0 * speed)
             name = f"virtual_{frac:g}rated_{'fw' if d > 0 else 'bw'}.csv"
             out.append(BenchRecord(name, t, a_in, a_out, np.full(t.shape, d * T),

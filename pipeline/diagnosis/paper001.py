@@ -13,11 +13,11 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
+from dynamics.results import ARCSEC_PER_RAD
 from pipeline.diagnosis.simulate import quasi_static_te
 
 MEASURED_ARCSEC = 57.467
 PAPER_BAND_ARCSEC = (-20.0, 25.0)
-ARCSEC_PER_RAD = 206264.806
 
 
 def coaxiality_closing_um(te_arcsec: np.ndarray, theta_out_rad: np.ndarray, r_mm: float,
