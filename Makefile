@@ -1,6 +1,6 @@
 # Batch pipeline: every stage is a file target, so Make reruns only what a change touches.
 #   make all                          every stage and the report for the cases in CASES
-#   make all CASE=cases/rv40e-81.toml one case
+#   make all CASE=cases/rv40e-81.toml one case (any path: the build folder is the case's name)
 #   make test                         the test suite (what CI runs)
 #   make bench                        benchmarks -> $(BUILD)/bench.json
 # `all`, `test` and `bench` create .venv and install the pinned dependencies when missing.
@@ -11,9 +11,13 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 BUILD ?= build
+# Cases: CASES names shipped cases (cases/<name>.toml); CASE=path/to/any.toml (one or more paths)
+# overrides them. The build folder is the case's `name` (read by geometry/params.py through
+# pipeline/deps.py), whatever the file is called or wherever it lies.
 CASES ?= rv40e-81 rv40e-105 rv160n-81
+CASE_FILES := $(CASES:%=cases/%.toml)
 ifdef CASE
-CASES := $(basename $(notdir $(CASE)))
+CASE_FILES := $(CASE)
 endif
 MEASURED ?= ../shared/measured
 SAMPLES ?= 4000
@@ -24,12 +28,12 @@ SCHED := $(if $(SCHEDULER),--scheduler $(SCHEDULER),)
 export MPLBACKEND := Agg
 export PYVISTA_OFF_SCREEN := true
 
-.PHONY: all test bench clean install report $(addprefix stage-,geometry mesh fem matrix hysteresis fourbar tolerance diagnosis)
+.PHONY: all test bench clean install report FORCE $(addprefix stage-,geometry mesh fem matrix hysteresis fourbar tolerance diagnosis)
 .DELETE_ON_ERROR:
 .SECONDARY:
 
 all: report
-	@echo "make all: reports in $(foreach c,$(CASES),$(BUILD)/$(c)/report/index.html)"
+	@echo "make all: reports in $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/report/index.html)"
 
 install: $(STAMP)
 $(STAMP): pyproject.toml
@@ -38,64 +42,89 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install -q -e '.[test]'
 	touch $@
 
-# Sources each stage depends on (a change in a stage's code reruns it and what follows).
-SRC_geometry := $(wildcard geometry/*.py pipeline/cmd_geometry.py)
-SRC_mesh := $(SRC_geometry) $(wildcard fem/mesh.py fem/shaft.py pipeline/cmd_fem.py)
-SRC_fem := $(SRC_geometry) $(wildcard fem/*.py pipeline/cmd_fem.py)
-SRC_dynamics := $(wildcard dynamics/*.py pipeline/cmd_dynamics.py pipeline/sweep.py)
-SRC_fourbar := $(wildcard dynamics/fourbar.py dynamics/tolerance.py pipeline/cmd_fourbar.py pipeline/sweep.py)
-SRC_diagnosis := $(wildcard pipeline/diagnosis/*.py pipeline/cmd_diagnose.py pipeline/records.py)
+# Generated makefiles (pipeline/deps.py), remade before Make reads the rules that use them:
+#   $(BUILD)/.deps.mk        SRC_<stage>: every project file the stage's command can import
+#                            (lazy imports included), remade when a source is added, removed or edited;
+#   $(BUILD)/.cases/*.mk     per case file: CASE_NAMES += <name>, CASE_FILE_<name> := <file>.
+PKG_DIRS := $(sort $(dir $(wildcard $(foreach p,geometry fem dynamics pipeline,$(p)/*.py $(p)/*/*.py $(p)/*/*/*.py))))
+PY_SOURCES := $(wildcard $(addsuffix *.py,$(PKG_DIRS)))
+DEPS_MK := $(BUILD)/.deps.mk
+case_mk = $(BUILD)/.cases/$(subst /,_,$(abspath $(1))).mk
+$(DEPS_MK): $(PY_SOURCES) $(PKG_DIRS) | $(STAMP)
+	$(PY) -m pipeline.deps sources --out $@
+define CASE_MK_RULE
+$(call case_mk,$(1)): $(1) pipeline/deps.py | $(STAMP)
+	$(PY) -m pipeline.deps case $(1) --out $$@
+endef
+CASE_MKS :=
+$(foreach f,$(CASE_FILES),$(if $(filter $(call case_mk,$(f)),$(CASE_MKS)),,\
+    $(eval CASE_MKS += $(call case_mk,$(f)))$(eval $(call CASE_MK_RULE,$(f)))))
+CASE_NAMES :=
+ifneq ($(filter-out clean install test bench,$(or $(MAKECMDGOALS),all)),)
+$(foreach f,$(CASE_FILES),$(if $(wildcard $(f)),,$(error case file $(f) not found (CASE=path/to/case.toml or CASES=<names of cases/*.toml>))))
+include $(DEPS_MK) $(CASE_MKS)
+endif
 
-stage-geometry: $(foreach c,$(CASES),$(BUILD)/$(c)/geometry/profile.csv)
-$(BUILD)/%/geometry/profile.csv: cases/%.toml $(SRC_geometry) | $(STAMP)
-	$(RUN) geometry --case $< --out $(BUILD)/$*/geometry $(Q)
+# Every stage depends on its case's content fingerprint (geometry/fingerprint.py), not on the case
+# file: rewritten only when the validated content changes, so a comment edit reruns nothing, while
+# another file with the same name but other values reruns everything. `+` runs it under `make -n`
+# too, so a dry run shows exactly what would rebuild.
+CASE_FP = $(BUILD)/%/.case-fingerprint
+$(BUILD)/%/.case-fingerprint: FORCE | $(STAMP)
+	+@$(PY) -m pipeline.deps fingerprint $(or $(CASE_FILE_$*),$(error no case file for build folder '$*': pass CASE=path/to/case.toml)) --name $* --out $@
+FORCE:
 
-# The crankshaft tet mesh is made once (fTetWild is not run-to-run reproducible) and reused.
-stage-mesh: $(foreach c,$(CASES),$(BUILD)/$(c)/mesh/crankshaft_mesh.npz)
-$(BUILD)/%/mesh/crankshaft_mesh.npz: cases/%.toml $(BUILD)/%/geometry/profile.csv $(SRC_mesh) | $(STAMP)
-	$(RUN) mesh --case $< --out $(BUILD)/$*/mesh $(Q)
+.SECONDEXPANSION:
+stage-geometry: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/geometry/profile.csv)
+$(BUILD)/%/geometry/profile.csv: $(CASE_FP) $(SRC_geometry) | $(STAMP)
+	$(RUN) geometry --case $(CASE_FILE_$*) --out $(BUILD)/$*/geometry $(Q)
 
-stage-fem: $(foreach c,$(CASES),$(BUILD)/$(c)/fem/stiffness.json)
-$(BUILD)/%/fem/stiffness.json: cases/%.toml $(BUILD)/%/mesh/crankshaft_mesh.npz $(SRC_fem) | $(STAMP)
-	$(RUN) fem --case $< --mesh $(BUILD)/$*/mesh --out $(BUILD)/$*/fem $(Q)
+# The crankshaft tet mesh is made once (fTetWild is not run-to-run reproducible) and reused; its rule
+# depends only on the code the mesh command runs, not on the FE solvers.
+stage-mesh: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/mesh/crankshaft_mesh.npz)
+$(BUILD)/%/mesh/crankshaft_mesh.npz: $(CASE_FP) $(BUILD)/%/geometry/profile.csv $(SRC_mesh) | $(STAMP)
+	$(RUN) mesh --case $(CASE_FILE_$*) --out $(BUILD)/$*/mesh $(Q)
+
+stage-fem: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/fem/stiffness.json)
+$(BUILD)/%/fem/stiffness.json: $(CASE_FP) $(BUILD)/%/mesh/crankshaft_mesh.npz $(SRC_fem) | $(STAMP)
+	$(RUN) fem --case $(CASE_FILE_$*) --mesh $(BUILD)/$*/mesh --out $(BUILD)/$*/fem $(Q)
 
 STIFF = --stiffness $(BUILD)/$*/fem/stiffness.json
 
-stage-matrix: $(foreach c,$(CASES),$(BUILD)/$(c)/matrix/te_std.csv)
-$(BUILD)/%/matrix/te_std.csv: cases/%.toml $(BUILD)/%/fem/stiffness.json $(SRC_dynamics) | $(STAMP)
-	$(RUN) matrix --case $< $(STIFF) --out $(BUILD)/$*/matrix $(SCHED) $(Q)
+stage-matrix: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/matrix/te_std.csv)
+$(BUILD)/%/matrix/te_std.csv: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(SRC_matrix) | $(STAMP)
+	$(RUN) matrix --case $(CASE_FILE_$*) $(STIFF) --out $(BUILD)/$*/matrix $(SCHED) $(Q)
 
-stage-hysteresis: $(foreach c,$(CASES),$(BUILD)/$(c)/hysteresis/hysteresis.json)
-$(BUILD)/%/hysteresis/hysteresis.json: cases/%.toml $(BUILD)/%/fem/stiffness.json $(SRC_dynamics) | $(STAMP)
-	$(RUN) hysteresis --case $< $(STIFF) --out $(BUILD)/$*/hysteresis $(Q)
+stage-hysteresis: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/hysteresis/hysteresis.json)
+$(BUILD)/%/hysteresis/hysteresis.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(SRC_hysteresis) | $(STAMP)
+	$(RUN) hysteresis --case $(CASE_FILE_$*) $(STIFF) --out $(BUILD)/$*/hysteresis $(Q)
 
-stage-fourbar: $(foreach c,$(CASES),$(BUILD)/$(c)/fourbar/comparison.md)
-$(BUILD)/%/fourbar/comparison.md: cases/%.toml $(BUILD)/%/fem/stiffness.json $(SRC_fourbar) $(SRC_dynamics) | $(STAMP)
-	$(RUN) fourbar --case $< $(STIFF) --out $(BUILD)/$*/fourbar $(Q)
+stage-fourbar: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/fourbar/comparison.md)
+$(BUILD)/%/fourbar/comparison.md: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(SRC_fourbar) | $(STAMP)
+	$(RUN) fourbar --case $(CASE_FILE_$*) $(STIFF) --out $(BUILD)/$*/fourbar $(Q)
 
-stage-tolerance: $(foreach c,$(CASES),$(BUILD)/$(c)/tolerance/summary.json)
-$(BUILD)/%/tolerance/summary.json: cases/%.toml $(BUILD)/%/fem/stiffness.json $(SRC_fourbar) | $(STAMP)
-	$(RUN) tolerance --case $< $(STIFF) --samples $(SAMPLES) --out $(BUILD)/$*/tolerance $(SCHED) $(Q)
+stage-tolerance: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/tolerance/summary.json)
+$(BUILD)/%/tolerance/summary.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(SRC_tolerance) | $(STAMP)
+	$(RUN) tolerance --case $(CASE_FILE_$*) $(STIFF) --samples $(SAMPLES) --out $(BUILD)/$*/tolerance $(SCHED) $(Q)
 
 # Diagnosis runs where bench records exist for the case: the real RV-160N records (read in place,
-# never copied); the RV-40E cases have none shipped.
+# never copied, and prerequisites: a changed record reruns it); the RV-40E cases have none shipped.
 RECORDS_rv160n-81 = $(wildcard $(MEASURED)/rv160n_*.csv)
-stage-diagnosis: $(foreach c,$(CASES),$(if $(RECORDS_$(c)),$(BUILD)/$(c)/diagnosis/diagnosis.json))
-$(BUILD)/%/diagnosis/diagnosis.json: cases/%.toml $(BUILD)/%/fem/stiffness.json $(SRC_diagnosis) $(SRC_dynamics) | $(STAMP)
-	$(RUN) diagnose --case $< $(STIFF) --measured $(RECORDS_$*) --out $(BUILD)/$*/diagnosis $(Q)
+stage-diagnosis: $(foreach c,$(CASE_NAMES),$(if $(RECORDS_$(c)),$(BUILD)/$(c)/diagnosis/diagnosis.json))
+$(BUILD)/%/diagnosis/diagnosis.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $$(RECORDS_$$*) $(SRC_diagnosis) | $(STAMP)
+	$(RUN) diagnose --case $(CASE_FILE_$*) $(STIFF) --measured $(RECORDS_$*) --out $(BUILD)/$*/diagnosis $(Q)
 
 # Paper 001's no-load bench case (RV-40E, i = 81) as a worked example of the coaxiality diagnosis.
-$(BUILD)/%/diagnosis/paper001.json: cases/%.toml $(BUILD)/%/fem/stiffness.json $(SRC_diagnosis) $(SRC_dynamics) | $(STAMP)
-	$(RUN) paper001 --case $< $(STIFF) --out $(BUILD)/$*/diagnosis $(Q)
+$(BUILD)/%/diagnosis/paper001.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(SRC_paper001) | $(STAMP)
+	$(RUN) paper001 --case $(CASE_FILE_$*) $(STIFF) --out $(BUILD)/$*/diagnosis $(Q)
 
 STAGES = geometry/profile.csv mesh/crankshaft_mesh.npz fem/stiffness.json matrix/te_std.csv hysteresis/hysteresis.json \
          fourbar/comparison.md tolerance/summary.json
-report: $(foreach c,$(CASES),$(BUILD)/$(c)/report/index.html)
-.SECONDEXPANSION:
-$(BUILD)/%/report/index.html: cases/%.toml $$(addprefix $(BUILD)/%/,$(STAGES)) \
+report: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/report/index.html)
+$(BUILD)/%/report/index.html: $(CASE_FP) $$(addprefix $(BUILD)/%/,$(STAGES)) \
         $$(if $$(RECORDS_$$*),$(BUILD)/%/diagnosis/diagnosis.json) \
-        $$(if $$(filter rv40e-81,$$*),$(BUILD)/%/diagnosis/paper001.json) pipeline/report.py | $(STAMP)
-	$(RUN) report --case $< --build $(BUILD) $(Q)
+        $$(if $$(filter rv40e-81,$$*),$(BUILD)/%/diagnosis/paper001.json) $(SRC_report) | $(STAMP)
+	$(RUN) report --case $(CASE_FILE_$*) --build $(BUILD) $(Q)
 
 test: $(STAMP)
 	$(PY) -m pytest -q -p no:cacheprovider

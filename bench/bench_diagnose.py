@@ -25,7 +25,7 @@ def run() -> dict:
     recs = bench_records(quasi_static_te, case, stiff, [eff], seed=0, torque_fractions=(0.3,),
                          samples_per_rev=1024, speed_rpm=6.0 * case.ratio)
     # resample each record to 4 kHz over its 10 s (the loader's view of a real 10 s record)
-    from pipeline.records import BenchRecord
+    from dynamics.records import BenchRecord
     dense = []
     for r in recs:
         t = np.linspace(0.0, r.time_s[-1], 40001)

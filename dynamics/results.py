@@ -2,12 +2,12 @@
 
 TE = theta_out - theta_in / i in arcsec, positive = output ahead (DESIGN.md). The output angle is
 the one an output encoder reads: the carrier angle plus the once-per-revolution apparent error of
-an output coaxiality (mounting) offset (see dynamics.model).
+an output coaxiality (mounting) offset (see dynamics.model). A TEResult is written as a bench record
+by dynamics.records.write_te_result (the record format's home; this module does not import it).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -72,15 +72,6 @@ class TEResult:
             return order_spectrum(self.output_angle_deg[m], self.te_arcsec[m], points_per_rev)
         except ValueError as exc:
             raise ResultError(f"TE spectrum: {exc}; simulate longer or start the window earlier") from None
-
-    def to_record(self, path: str | Path, comments: list[str] = ()) -> None:
-        """Write the bench-record CSV (DESIGN.md format) plus te_arcsec and teeth columns."""
-        from pipeline.records import write_record
-        extra = {"te_arcsec": self.te_arcsec}
-        for d in range(self.teeth_in_contact.shape[1]):
-            extra[f"teeth_in_contact_disc{d + 1}"] = self.teeth_in_contact[:, d]
-        write_record(path, self.t_s, self.input_angle_deg, self.output_angle_deg,
-                     self.output_torque_Nm, comments=list(comments), extra=extra)
 
 
 @dataclass(frozen=True)

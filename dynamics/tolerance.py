@@ -31,6 +31,7 @@ from dynamics.fourbar import (ARCSEC_PER_RAD, Build, FourBarError, JointComplian
                               PairLoads, rigid_and_elastic)
 
 DISTRIBUTIONS = ("uniform", "normal")
+MAX_BAND_UM = 100.0  # bands and clearances beyond 0.1 mm are no longer a tolerance of a precision reducer
 BLOCK = 250          # samples per random stream; chunk sizes are rounded up to a multiple
 DRAW_COLUMNS = ("d_l1_um", "d_l3_um", "d_l2_um", "d_l4_um", "turning_arm_clearance_a_um",
                 "turning_arm_clearance_b_um", "support_clearance_a_um", "support_clearance_b_um")
@@ -52,8 +53,8 @@ class ToleranceBands:
         for name in ("eccentricity_um", "crank_hole_um", "output_hole_um",
                      "turning_arm_clearance_um", "support_clearance_um"):
             v = getattr(self, name)
-            if not (math.isfinite(v) and 0.0 <= v <= 100.0):
-                raise FourBarError(f"tolerance band {name} = {v!r}: allowed 0 to 100 um")
+            if not (math.isfinite(v) and 0.0 <= v <= MAX_BAND_UM):
+                raise FourBarError(f"tolerance band {name} = {v!r}: allowed 0 to {MAX_BAND_UM:g} um")
         if self.distribution not in DISTRIBUTIONS:
             raise FourBarError(f"distribution = {self.distribution!r}: allowed {', '.join(DISTRIBUTIONS)}")
 
@@ -148,6 +149,8 @@ def monte_carlo(task: ChunkTask, samples: int, *, chunk_size: int = 20000,
                 map_chunks: Callable[[Callable, Sequence[tuple]], list] | None = None,
                 limit_arcsec: float = 60.0) -> MonteCarloResult:
     """Run all chunks through map_chunks(func, [(task, start, stop), ...]) (default: in process)."""
+    if not (math.isfinite(limit_arcsec) and limit_arcsec > 0.0):
+        raise FourBarError(f"accuracy limit = {limit_arcsec!r} arcsec: allowed > 0")
     bounds = chunk_bounds(samples, chunk_size)
     tasks = [(task, a, b) for a, b in bounds]
     parts = map_chunks(evaluate_chunk, tasks) if map_chunks else [evaluate_chunk(*t) for t in tasks]

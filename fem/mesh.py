@@ -15,9 +15,11 @@ Lengths are metres in every mesh; boundary node sets are named and ordered along
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import tempfile
 import threading
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -25,6 +27,7 @@ from typing import Callable
 import numpy as np
 
 from geometry.artifacts import InputError, atomic_path
+from geometry.fingerprint import Provenance
 
 
 class MeshError(InputError):
@@ -52,6 +55,10 @@ class Mesh2D:
 class Mesh3D:
     points: np.ndarray                 # (n, 3) [m]
     tetrahedra: np.ndarray             # (k, 4)
+    made_from: Provenance | None = field(default=None, compare=False)   # of a mesh read from disk
+
+
+MESH_SCHEMA = "rv-crankshaft-mesh/2"   # the mesh stage's .npz; 2: carries made_from
 
 
 def graded_parameters(curve: Callable[[np.ndarray], np.ndarray], t0: float, t1: float,
@@ -304,23 +311,37 @@ def write_vtu(path: str | Path, points: np.ndarray, cells: np.ndarray,
         meshio.write(tmp, m, file_format="vtu")
 
 
-def save_mesh3d(path: str | Path, mesh: Mesh3D, **meta: str | float) -> None:
-    """A tet mesh and what it was made from (e.g. the solid's fingerprint), atomically (.npz)."""
+def save_mesh3d(path: str | Path, mesh: Mesh3D, made_from=None, **meta: str | float) -> None:
+    """A tet mesh and what it was made from (a geometry.fingerprint.Provenance, stored as JSON, and
+    e.g. the solid's fingerprint), atomically (.npz)."""
+    if made_from is not None:
+        meta["made_from"] = json.dumps(made_from.to_json(), sort_keys=True)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, points=mesh.points, tetrahedra=mesh.tetrahedra,
                      **{f"meta_{k}": np.asarray(v) for k, v in meta.items()})
 
 
-def load_mesh3d(path: str | Path, **expect: str | float) -> Mesh3D:
-    """Read a mesh of `save_mesh3d`; every `expect` entry must match the stored one."""
+def load_mesh3d(path: str | Path, case=None, **expect: str | float) -> Mesh3D:
+    """Read a mesh of `save_mesh3d`; every `expect` entry must match the stored one, and with `case`
+    the mesh must have been made from that case as it is now (its fingerprint)."""
     path = Path(path)
     if not path.exists():
         raise MeshError(f"{path}: mesh not found (run `python -m pipeline mesh` first)")
-    with np.load(path) as z:
+    try:
+        z = np.load(path)
+    except (OSError, ValueError, zipfile.BadZipFile) as exc:
+        raise MeshError(f"{path}: not a mesh of the mesh stage ({exc}); rerun `python -m pipeline mesh`") from None
+    with z:
+        made = None
+        if case is not None:
+            stored = z["meta_made_from"].item() if "meta_made_from" in z.files else None
+            made = Provenance.from_json(None if stored is None else json.loads(stored), str(path))
+            made.check(case, str(path), f"python -m pipeline mesh --case {case.source or case.name} "
+                                        f"--out {path.parent}", artifact=MESH_SCHEMA)
         for key, want in expect.items():
             got = z[f"meta_{key}"].item() if f"meta_{key}" in z.files else None
             if got != want:
                 raise MeshError(f"{path}: made for {key} = {got!r}, this case needs {want!r}; "
                                 f"rerun `python -m pipeline mesh` for this case")
-        return Mesh3D(z["points"].copy(), z["tetrahedra"].copy())
+        return Mesh3D(z["points"].copy(), z["tetrahedra"].copy(), made)

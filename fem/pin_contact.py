@@ -25,6 +25,7 @@ import numpy as np
 
 from fem import contact, elastic, hertz
 from fem.mesh import Mesh2D, block_mesh, pin_mesh, profile_sector_mesh
+from geometry import pin_profile
 from geometry.artifacts import InputError
 from geometry.profile import cycloid_xy, profile_args
 
@@ -201,34 +202,33 @@ def pin_pose(case, position_deg: np.ndarray) -> np.ndarray:
     return np.column_stack([cr * rel[:, 0] - sr * rel[:, 1], sr * rel[:, 0] + cr * rel[:, 1]])
 
 
-def first_contact(case, centres_mm: np.ndarray, t_range: tuple[float, float], n: int = 40001):
-    """For each pin centre: profile parameter t of the nearest point of the modified profile,
-    the unit normal from the profile towards the pin, the pin centre moved along it to touch
-    (distance = real pin radius), and the profile's curvature radius there (>0 convex)."""
+@dataclass(frozen=True)
+class FirstContact:
+    """Where each pin first touches the modified profile (arrays over pin positions; disc frame, mm)."""
+    t_rad: np.ndarray                 # profile parameter of the contact point
+    point_mm: np.ndarray              # (P, 2) contact point on the profile
+    normal: np.ndarray                # (P, 2) unit normal of the profile there, towards the pin (outward)
+    centre_mm: np.ndarray             # (P, 2) pin centre moved along the normal until it touches
+    curvature_radius_mm: np.ndarray   # profile curvature radius at the contact (> 0 convex)
+
+
+def first_contact(case, centres_mm: np.ndarray, t_range: tuple[float, float]) -> FirstContact:
+    """For each pin centre: the foot point on the modified profile (exact, from the one geometry
+    kernel `geometry.pin_profile`), its outward normal, the pin centre moved along it to touch
+    (distance = the pin radius the FE pin mesh has) and the profile's curvature radius there, from
+    the analytic curvature of the pin-centre curve (1 / kappa - Rr). t is reported in the branch
+    t_range, which must hold the foot point."""
     args = profile_args(case, modified=True)
-    Rr = case.cycloid.pin_radius_mm
-    t = np.linspace(*t_range, n)
-    xy = np.column_stack(cycloid_xy(t, **args))
-    out = []
-    for c in centres_mm:
-        i = int(np.argmin(np.hypot(*(xy - c).T)))
-        # refine on a fine local grid around the discrete minimum
-        tt = np.linspace(t[max(i - 2, 0)], t[min(i + 2, n - 1)], 2001)
-        pts = np.column_stack(cycloid_xy(tt, **args))
-        j = int(np.argmin(np.hypot(*(pts - c).T)))
-        tc, p = tt[j], pts[j]
-        nrm = (c - p) / np.hypot(*(c - p))
-        # curvature radius from the first and second derivatives (central differences)
-        dt = 1e-5
-        p_m, p_p = (np.array(cycloid_xy(np.array([tc + s]), **args)).ravel() for s in (-dt, dt))
-        d1, d2 = (p_p - p_m) / (2 * dt), (p_p - 2 * p + p_m) / dt ** 2
-        kappa = (d1[0] * d2[1] - d1[1] * d2[0]) / np.hypot(*d1) ** 3
-        rho = 1.0 / kappa if kappa != 0 else np.inf
-        # sign: convex (positive) when the centre of curvature lies away from the pin
-        centre_of_curv = p + np.array([-d1[1], d1[0]]) / np.hypot(*d1) * rho
-        convex = np.dot(centre_of_curv - p, nrm) < 0
-        out.append((tc, p, nrm, p + nrm * Rr, abs(rho) if convex else -abs(rho)))
-    return out
+    q = np.asarray(centres_mm, float).reshape(-1, 2)
+    foot = pin_profile.nearest(q[:, 0], q[:, 1], args["R"], args["E"], args["zp"], args["rotation_rad"])
+    t = t_range[0] + np.mod(foot.t_rad - t_range[0], 2 * np.pi)
+    if np.any(t > t_range[1]):
+        k = int(np.argmax(t > t_range[1]))
+        raise InputError(f"pin centre {q[k].tolist()} mm: its foot point t = {t[k]:.6g} rad lies outside "
+                         f"the profile stretch t in [{t_range[0]:.6g}, {t_range[1]:.6g}] rad")
+    point = foot.profile_point_mm(args["Rr"])
+    return FirstContact(t, point, foot.normal, point + case.cycloid.pin_radius_mm * foot.normal,
+                        pin_profile.profile_curvature_radius_mm(foot.curvature_per_mm, args["Rr"]))
 
 
 def path_of_contact(case, *, n: int = 9, lo_deg: float = 10.0, hi_deg: float = 170.0) -> np.ndarray:
@@ -297,7 +297,7 @@ def tooth_pair_map(case, *, positions_deg=None, loads_N=None, mesh_size_m: float
     fc = first_contact(case, centres, t_range)
     Es = hertz.contact_modulus(E, nu)
     Rr = c.pin_radius_mm * 1e-3
-    rho = np.array([f[4] for f in fc]) * 1e-3
+    rho = fc.curvature_radius_mm * 1e-3
     Rp = np.array([hertz.effective_radius(Rr, r) for r in rho])
     p0_h, b_h = hertz.hertz_line(loads[None, :], width, Rp[:, None], Es)
     b_min = float(b_h.min())
@@ -313,14 +313,14 @@ def tooth_pair_map(case, *, positions_deg=None, loads_N=None, mesh_size_m: float
     root = c.pin_circle_radius_mm - c.eccentricity_mm - c.pin_radius_mm
     inner = (root - 2 * c.eccentricity_mm - 2 * np.pi * c.pin_circle_radius_mm / c.zp) * 1e-3
     t0, t1 = -0.9 * pitch, 0.9 * pitch
-    dmesh = profile_sector_mesh(curve, t1, t0, [f[0] for f in fc], inner, h, h_max, GROWTH)
+    dmesh = profile_sector_mesh(curve, t1, t0, list(fc.t_rad), inner, h, h_max, GROWTH)
     t_mesh = time.perf_counter()
     prof_nodes = dmesh.boundary["profile"]
     prof_pts = dmesh.points[prof_nodes]
     s_arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(prof_pts, axis=0).T))])
     windows = []
-    for f in fc:
-        i0 = int(np.argmin(np.hypot(*(prof_pts - f[1] * 1e-3).T)))
+    for p_mm in fc.point_mm:
+        i0 = int(np.argmin(np.hypot(*(prof_pts - p_mm * 1e-3).T)))
         windows.append((i0, np.abs(s_arc - s_arc[i0]) <= window))
     K = elastic.stiffness(elastic.basis_2d(dmesh), E, nu)
     fixed = dmesh.boundary["inner"]
@@ -335,7 +335,7 @@ def tooth_pair_map(case, *, positions_deg=None, loads_N=None, mesh_size_m: float
     P, L = len(pos), len(loads)
     app, pk, hw = (np.zeros((P, L)) for _ in range(3))
     snapshot = {}
-    for ip, (tc, p_mm, nrm, centre_mm, _) in enumerate(fc):
+    for ip, (nrm, centre_mm) in enumerate(zip(fc.normal, fc.centre_mm)):
         i0, sel = windows[ip]
         cand = prof_nodes[sel]
         setup = make_setup(pin, centre_mm * 1e-3, nrm, dmesh.points, dfac, cand, s_arc[sel] - s_arc[i0])

@@ -1,6 +1,6 @@
 """The stiffness artifact: what the FEM stage hands the dynamics stage (`stiffness.json`).
 
-Schema `rv-stiffness/1`, SI units in every key. All compliances are FE results of this project's
+Schema `rv-stiffness/2`, SI units in every key. All compliances are FE results of this project's
 own geometry except where `sources` says otherwise (the involute mesh uses ISO 6336-1's single-
 tooth stiffness, the support bearings the case file's assumed catalog figure).
 
@@ -18,6 +18,10 @@ crankshaft           eccentric-centre compliance of the shaft on its support bea
   bending_stiffness_N_per_m (lateral, at an eccentric), torsional_stiffness_Nm_per_rad (planet to eccentric)
 support_bearing      radial_stiffness_N_per_m (per bearing)
 involute_mesh        mean_stiffness_N_per_m, stiffness_variation (peak-to-peak / mean), contact_ratio
+made_from            what it was made from (geometry.fingerprint.Provenance: case fingerprint, input
+                     mesh fingerprint); null only for models built in memory (tests). Read for a case
+                     (`for_case`, `path_for_case`, `load(path, case)`), a file made from another case
+                     or another version of it is refused. Schema 2 added made_from.
 """
 from __future__ import annotations
 
@@ -28,8 +32,9 @@ from pathlib import Path
 import numpy as np
 
 from geometry.artifacts import InputError, write_json_atomic
+from geometry.fingerprint import Provenance
 
-SCHEMA = "rv-stiffness/1"
+SCHEMA = "rv-stiffness/2"
 
 
 class StiffnessError(InputError):
@@ -77,6 +82,7 @@ class StiffnessModel:
     involute_mesh_contact_ratio: float
     sources: dict = field(default_factory=dict)   # quantity -> where it comes from
     extras: dict = field(default_factory=dict)    # mesh sizes, convergence, checks (free form)
+    made_from: Provenance | None = None           # case and input fingerprints (None: in memory only)
 
     def to_json(self) -> dict:
         pc, ta = self.pin_contact, self.turning_arm
@@ -100,12 +106,16 @@ class StiffnessModel:
                               "contact_ratio": float(self.involute_mesh_contact_ratio)},
             "sources": self.sources,
             "extras": self.extras,
+            "made_from": None if self.made_from is None else self.made_from.to_json(),
         }
 
     @classmethod
     def from_json(cls, data: dict, where: str = "stiffness.json") -> "StiffnessModel":
         if data.get("schema") != SCHEMA:
-            raise StiffnessError(f"{where}: schema {data.get('schema')!r}, expected {SCHEMA!r}")
+            raise StiffnessError(f"{where}: schema {data.get('schema')!r}, expected {SCHEMA!r}: "
+                                 f"rebuild it with `python -m pipeline fem`")
+        made = data.get("made_from")
+        made = None if made is None else Provenance.from_json(made, where)
         try:
             pc = {k: np.asarray(v, dtype=float) for k, v in data["pin_contact"].items()}
             ta = data["turning_arm"]
@@ -123,7 +133,7 @@ class StiffnessModel:
                 involute_mesh_mean_stiffness_N_per_m=float(data["involute_mesh"]["mean_stiffness_N_per_m"]),
                 involute_mesh_stiffness_variation=float(data["involute_mesh"]["stiffness_variation"]),
                 involute_mesh_contact_ratio=float(data["involute_mesh"]["contact_ratio"]),
-                sources=data.get("sources", {}), extras=data.get("extras", {}))
+                sources=data.get("sources", {}), extras=data.get("extras", {}), made_from=made)
         except (KeyError, TypeError) as exc:
             raise StiffnessError(f"{where}: missing or malformed entry {exc}") from None
         model.check(where)
@@ -149,31 +159,66 @@ def save(model: StiffnessModel, path: str | Path) -> None:
     write_json_atomic(path, model.to_json())
 
 
-def path_for_case(case, path: str | Path | None = None) -> Path:
-    """`path`, or the fem stage's artifact build/<case name>/fem/stiffness.json under the current
-    folder; a missing file names the command that makes it."""
+def rerun_command(case, path: str | Path) -> str:
+    return f"python -m pipeline fem --case {case.source or case.name} --out {Path(path).parent}"
+
+
+def check_made_from(model_or_json, case, path: str | Path) -> None:
+    """Refuse a stiffness (model or its JSON) not made from `case` as it is now (its fingerprint)."""
+    made = model_or_json.get("made_from") if isinstance(model_or_json, dict) else model_or_json.made_from
+    where = str(path)
+    if not isinstance(made, Provenance):
+        made = Provenance.from_json(made, where)
+    made.check(case, where, rerun_command(case, path), artifact=SCHEMA)
+
+
+def _existing(case, path: str | Path | None) -> Path:
     path = Path(path) if path else Path("build") / case.name / "fem" / "stiffness.json"
     if not path.exists():
-        raise StiffnessError(f"--stiffness {path}: not found; run `python -m pipeline fem --case "
-                             f"{case.source or case.name} --out {path.parent}` first (or pass --stiffness PATH)")
+        raise StiffnessError(f"--stiffness {path}: not found; run `{rerun_command(case, path)}` first "
+                             f"(or pass --stiffness PATH)")
+    return path
+
+
+def path_for_case(case, path: str | Path | None = None) -> Path:
+    """`path`, or the fem stage's artifact build/<case name>/fem/stiffness.json under the current
+    folder, checked to be made from this case (schema and fingerprint); a missing or foreign file
+    names the command that makes it."""
+    path = _existing(case, path)
+    check_made_from(_read_json(path), case, path)
     return path
 
 
 def for_case(case, path: str | Path | None = None) -> StiffnessModel:
     """The stiffness of a case (see `path_for_case`)."""
-    return load(path_for_case(case, path))
+    return load(_existing(case, path), case)
 
 
-def load(path: str | Path) -> StiffnessModel:
+def load(path: str | Path, case=None) -> StiffnessModel:
+    """Read a stiffness.json; with `case`, refuse one made from another case or case version."""
     path = Path(path)
+    data = _read_json(path)
+    model = StiffnessModel.from_json(data, str(path))
+    if case is not None:
+        check_made_from(model, case, path)
+    return model
+
+
+def _read_json(path: Path) -> dict:
     try:
         data = json.loads(path.read_text())
     except FileNotFoundError:
         raise StiffnessError(f"{path}: not found (run `python -m pipeline fem` first)") from None
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise StiffnessError(f"{path}: not valid JSON ({exc})") from None
-    return StiffnessModel.from_json(data, str(path))
+    except OSError as exc:
+        raise StiffnessError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    if not isinstance(data, dict) or data.get("schema") != SCHEMA:
+        got = data.get("schema") if isinstance(data, dict) else type(data).__name__
+        raise StiffnessError(f"{path}: schema {got!r}, expected {SCHEMA!r}: rebuild it with "
+                             f"`python -m pipeline fem`")
+    return data
 
 
 __all__ = ["SCHEMA", "StiffnessModel", "PinContact", "TurningArm", "StiffnessError", "save", "load",
-           "for_case", "path_for_case"]
+           "for_case", "path_for_case", "check_made_from"]

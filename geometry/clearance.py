@@ -1,15 +1,10 @@
-"""Pin-to-profile gaps, moment arms, minimum clearance, backlash and the undercut check.
+"""Pin-to-profile gaps, moment arms, minimum clearance and backlash of a case.
 
-Method (numerical, on the parametric curve, no polyline): the disc profile is the inward offset,
-by the (modified) pin radius, of the theoretical pin-centre curve
-    c(t) = Rot(delta) [R cos t - E cos(zp t), -R sin t + E sin(zp t)]        (R, delta modified)
-(`geometry.profile.cycloid_xy` is exactly c(t) - Rr n(t), n the outward unit normal; the profile
-traces clockwise). Offset curves share their normals, so the foot point of a pin centre q on the
-profile has the parameter t* of its foot point on c: the root of g(t) = (c(t) - q) . c'(t).
-t* is seeded by the nearest of `samples_per_tooth` grid points per tooth and refined by a
-bracketed Newton iteration to machine precision; the gap is then measured on the actual profile
-point p(t*) = cycloid_xy(t*) along the outward normal and the pin radius is subtracted:
-    gap = (q - p(t*)) . n(t*) - Rr_pin       (0 = tangent, < 0 = interference).
+Method (numerical, on the parametric curve, no polyline): the foot point of each pin centre q on
+the pin-centre curve c(t) (R, delta modified) comes from the one geometry kernel,
+`geometry.pin_profile` (seeded bracketed Newton to machine precision); the profile point is
+p = c(t*) - Rr n(t*) (Rr modified, n the outward normal) and
+    gap = (q - c(t*)) . n(t*) + Rr_profile - Rr_pin       (0 = tangent, < 0 = interference).
 A 2000-point polyline would instead carry a chordal error h^2 / (8 rho), up to 4 um on the RV-40E
 (h = 0.23 mm, rho = 1.6 mm at the tips), the size of a micron clearance; here the discretisation
 only picks the basin (tests: gaps independent of the seed grid at K1 = 0.95, micron gaps).
@@ -50,95 +45,26 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 from scipy.optimize import brentq
 
+from geometry import pin_profile
 from geometry.params import CaseError, ReducerCase
-from geometry.profile import cycloid_xy, profile_args
+# re-exported for their callers (geometry.solids, pipeline.cmd_geometry); their home is pin_profile
+from geometry.pin_profile import min_convex_radius_mm, theoretical_curve  # noqa: F401
+from geometry.profile import profile_args
 
 ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
 
 
-# ----------------------------------------------------------------------------- curve kernels
-def theoretical_curve(t: np.ndarray, R: float, E: float, zp: int, rotation_rad: float = 0.0,
-                      derivative: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Pin-centre curve c(t) of the profile (or its 1st/2nd derivative in t), disc frame [mm]."""
-    t = np.asarray(t, dtype=float)
-    ct, st, cz, sz = np.cos(t), np.sin(t), np.cos(zp * t), np.sin(zp * t)
-    if derivative == 0:
-        x, y = R * ct - E * cz, -R * st + E * sz
-    elif derivative == 1:
-        x, y = -R * st + E * zp * sz, -R * ct + E * zp * cz
-    elif derivative == 2:
-        x, y = -R * ct + E * zp**2 * cz, R * st - E * zp**2 * sz
-    else:
-        raise ValueError(f"derivative = {derivative}: allowed 0, 1, 2")
-    if rotation_rad:
-        c, s = math.cos(rotation_rad), math.sin(rotation_rad)
-        x, y = c * x - s * y, s * x + c * y
-    return x, y
-
-
-def curvature_per_mm(t: np.ndarray, R: float, E: float, zp: int) -> np.ndarray:
-    """Signed curvature of c(t), > 0 where the disc is convex (centre of curvature inside)."""
-    dx, dy = theoretical_curve(t, R, E, zp, derivative=1)
-    ddx, ddy = theoretical_curve(t, R, E, zp, derivative=2)
-    # c(t) runs clockwise, so the usual (x'y'' - y'x'') is negative on convex parts
-    return -(dx * ddy - dy * ddx) / np.hypot(dx, dy) ** 3
-
-
-@lru_cache(maxsize=32)
-def _seed_grid(R: float, E: float, zp: int, rotation_rad: float, n: int):
-    t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-    x, y = theoretical_curve(t, R, E, zp, rotation_rad)
-    return t, x, y
-
-
-def foot_parameters(qx: np.ndarray, qy: np.ndarray, R: float, E: float, zp: int,
-                    rotation_rad: float = 0.0, samples_per_tooth: int = 64,
-                    tol_rad: float = 1e-14) -> np.ndarray:
-    """Parameter t* of the nearest point of c(t) to each point q (disc frame) [rad].
-
-    Seeded from a grid of `samples_per_tooth` points per tooth, refined by Newton on
-    g(t) = (c - q) . c' inside the bracket of the seed's neighbours (bisection when Newton leaves it).
-    """
-    qx, qy = np.atleast_1d(np.asarray(qx, float)), np.atleast_1d(np.asarray(qy, float))
-    n = samples_per_tooth * (zp - 1)
-    tg, xg, yg = _seed_grid(float(R), float(E), int(zp), float(rotation_rad), n)
-    d2 = (xg[None, :] - qx[:, None]) ** 2 + (yg[None, :] - qy[:, None]) ** 2
-    h = 2 * np.pi / n
-    t = tg[np.argmin(d2, axis=1)]
-    lo, hi = t - h, t + h
-    for _ in range(60):
-        x, y = theoretical_curve(t, R, E, zp, rotation_rad)
-        dx, dy = theoretical_curve(t, R, E, zp, rotation_rad, derivative=1)
-        ddx, ddy = theoretical_curve(t, R, E, zp, rotation_rad, derivative=2)
-        g = (x - qx) * dx + (y - qy) * dy
-        dg = dx * dx + dy * dy + (x - qx) * ddx + (y - qy) * ddy
-        lo, hi = np.where(g < 0, t, lo), np.where(g < 0, hi, t)   # g rises through the minimum
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tn = t - g / dg
-        bad = ~np.isfinite(tn) | (dg <= 0) | (tn <= lo) | (tn >= hi)
-        tn = np.where(bad, 0.5 * (lo + hi), tn)
-        step = np.abs(tn - t)
-        t = tn
-        if np.all(step < tol_rad):
-            break
-    return t
-
-
+# ----------------------------------------------------------------------------- foot points
 def _nearest(args: dict, qx: np.ndarray, qy: np.ndarray, samples_per_tooth: int = 64):
-    """Signed distance (> 0 outside the disc), foot point and outward normal on the profile."""
-    t = foot_parameters(qx, qy, args["R"], args["E"], args["zp"], args["rotation_rad"],
-                        samples_per_tooth)
-    px, py = cycloid_xy(t, **args)
-    dx, dy = theoretical_curve(t, args["R"], args["E"], args["zp"], args["rotation_rad"],
-                               derivative=1)
-    speed = np.hypot(dx, dy)
-    nx, ny = -dy / speed, dx / speed            # left of a clockwise curve = outward
-    return (qx - px) * nx + (qy - py) * ny, (px, py), (nx, ny)
+    """Signed distance to the profile (> 0 outside the disc), foot point and outward normal."""
+    foot = pin_profile.nearest(qx, qy, args["R"], args["E"], args["zp"], args["rotation_rad"],
+                               samples_per_tooth)
+    p = foot.profile_point_mm(args["Rr"])
+    return foot.distance_mm + args["Rr"], (p[:, 0], p[:, 1]), (foot.normal[:, 0], foot.normal[:, 1])
 
 
 def distance_to_profile_mm(case: ReducerCase, points_mm: np.ndarray, *, modified: bool = True,
@@ -336,34 +262,3 @@ def initial_clearance_mm(case: ReducerCase, phase_rad: np.ndarray) -> np.ndarray
     dR, dRr = _effective_mods_mm(case)
     b0 = (dRr - dR * math.sqrt(1 - _k1(case) ** 2)) / (c.eccentricity_mm * c.zc)
     return closed_form_gap_mm(case, phase_rad) - b0 * closed_form_arm_mm(case, phase_rad)
-
-
-# ----------------------------------------------------------------------------- undercut
-def min_convex_radius_mm(R: float, E: float, zp: int, samples_per_tooth: int = 256) -> float:
-    """Smallest radius of curvature of c(t) where the disc is convex (tooth tips) [mm].
-
-    One tooth (t in [0, 2 pi / (zp - 1)]) is sampled; the minimum is refined by a parabola."""
-    t = np.linspace(0.0, 2 * np.pi / (zp - 1), samples_per_tooth + 1)
-    k = curvature_per_mm(t, R, E, zp)
-    if np.max(k) <= 0:
-        return math.inf
-    from scipy.optimize import minimize_scalar
-    i = int(np.argmax(k))
-    h = t[1] - t[0]
-    res = minimize_scalar(lambda s: -curvature_per_mm(np.array([s]), R, E, zp)[0],
-                          bounds=(t[i] - h, t[i] + h), method="bounded", options={"xatol": 1e-12})
-    return 1.0 / max(-res.fun, k[i])
-
-
-def check_undercut(case: ReducerCase) -> None:
-    """Raise CaseError if the modified profile loops: its pin radius Rr + dRr must stay below
-    the smallest convex radius of curvature of the (modified) pin-centre curve. (Where the disc
-    is concave, at the roots, an inward offset never loops.)"""
-    args = profile_args(case, modified=True)
-    rho = min_convex_radius_mm(args["R"], case.cycloid.eccentricity_mm, case.cycloid.zp)
-    if args["Rr"] >= rho:
-        where = f"{case.source + ': ' if case.source else ''}[cycloid] pin_radius_mm"
-        raise CaseError(f"{where} = {case.cycloid.pin_radius_mm} (+ equidistant "
-                        f"{case.modification.equidistant_mm}): the profile undercuts (loops) at the "
-                        f"tooth tips; allowed modified pin radius < {rho:.4g} mm, the smallest "
-                        f"convex radius of curvature of the pin-centre curve (lower E zp / R or Rr)")

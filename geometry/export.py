@@ -3,9 +3,12 @@
 A solid that OpenCascade does not call valid (self-intersecting outline, failed boolean) is never
 written: `InvalidSolidError` (an InputError: the case asked for an impossible part) names it.
 STL tolerances are chordal/angular deflections of the tessellation, in mm and rad.
+Same solid, same bytes: the STEP header's FILE_NAME (name, time stamp, author, organisation) is
+written from fixed values instead of the clock, so a rerun reproduces every file exactly.
 """
 from __future__ import annotations
 
+import errno
 from pathlib import Path
 
 import cadquery as cq
@@ -14,6 +17,8 @@ from geometry.artifacts import InputError, atomic_path
 
 STL_TOLERANCE_MM = 0.01        # chordal deflection [mm] (0.005 takes 40 s on a disc)
 STL_ANGULAR_TOLERANCE_RAD = 0.1
+STEP_TIME_STAMP = "1970-01-01T00:00:00"   # fixed: the clock would make every rerun differ
+STEP_AUTHOR = "rvte"
 
 
 class InvalidSolidError(InputError):
@@ -44,8 +49,30 @@ def export_step(obj: cq.Workplane | cq.Shape, path: str | Path, name: str | None
     path = Path(path)
     shape = check_valid(obj, name or path.stem)
     with atomic_path(path) as tmp:
-        cq.exporters.export(shape, str(tmp), exportType="STEP")
+        _write_step(shape, tmp, path.stem)
     return path
+
+
+def _write_step(shape: cq.Shape, path: Path, name: str) -> None:
+    """cadquery's Shape.exportStep (AP214, mm, pcurves) with a reproducible FILE_NAME header."""
+    from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
+    from OCP.IFSelect import IFSelect_ReturnStatus
+    from OCP.Interface import Interface_Static
+    from OCP.STEPControl import STEPControl_AsIs, STEPControl_Writer
+    from OCP.TCollection import TCollection_HAsciiString
+    writer = STEPControl_Writer()
+    Interface_Static.SetIVal_s("write.surfacecurve.mode", 1)
+    Interface_Static.SetIVal_s("write.precision.mode", 0)
+    Interface_Static.SetCVal_s("xstep.cascade.unit", "MM")
+    Interface_Static.SetCVal_s("write.step.unit", "MM")
+    writer.Transfer(shape.wrapped, STEPControl_AsIs)
+    header = APIHeaderSection_MakeHeader(writer.Model())
+    header.SetName(TCollection_HAsciiString(name))
+    header.SetTimeStamp(TCollection_HAsciiString(STEP_TIME_STAMP))
+    header.SetAuthorValue(1, TCollection_HAsciiString(STEP_AUTHOR))
+    header.SetOrganizationValue(1, TCollection_HAsciiString(STEP_AUTHOR))
+    if writer.Write(str(path)) != IFSelect_ReturnStatus.IFSelect_RetDone:
+        raise OSError(errno.EIO, "OpenCascade could not write the STEP file", str(path))
 
 
 def export_stl(obj: cq.Workplane | cq.Shape, path: str | Path, name: str | None = None, *,

@@ -6,18 +6,30 @@ comes from: a paper, the catalog, or an assumption); only the error sources defa
 Units are in the field names (mm, deg, GPa, ...); stages convert to SI at their own edges.
 
 Limits: the checks here are necessary conditions for a buildable second stage (conjugate cycloid,
-no cusp, no undercut of the modified profile is checked in `geometry.clearance`), not a design code.
+no cusp, no undercut of the modified profile, from the closed-form curvature of
+`geometry.pin_profile`), not a design code; sizes are bounded where a stage's cost grows with them
+(pin count `ZP_MAX`, case file size).
 """
 from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from geometry.artifacts import InputError
+from geometry.pin_profile import min_convex_radius_mm
+
+# Largest pin count accepted. Real cycloid reducers stay below it: RV reducers carry ~40 pins and
+# the finest single-stage cycloid drives (Sumitomo Cyclo, 119:1) have zc = 119, zp = 120. The
+# geometry stage's CAD outline is one spline per tooth and its deviation check samples each tooth,
+# so cost grows with zp; a 400-pin case asked for 30 GiB before the seed search was windowed.
+ZP_MAX = 120
+NAME_PATTERN = re.compile(r"[A-Za-z0-9._-]{1,100}")   # the name becomes the build folder's name
+CASE_FILE_MAX_BYTES = 1 << 20                           # a case file is a few kB of TOML
 
 
 class CaseError(InputError):
@@ -25,9 +37,10 @@ class CaseError(InputError):
 
 
 def _f(lo: float | None = None, hi: float | None = None, *, open_lo: bool = True,
-       default: Any = dataclasses.MISSING) -> Any:
-    """A field with an allowed range (open at lo by default: sizes must be positive)."""
-    md = {"lo": lo, "hi": hi, "open_lo": open_lo}
+       open_hi: bool = False, why: str = "", default: Any = dataclasses.MISSING) -> Any:
+    """A field with an allowed range (open at lo by default: sizes must be positive); `why` is
+    added to the message when a value falls outside."""
+    md = {"lo": lo, "hi": hi, "open_lo": open_lo, "open_hi": open_hi, "why": why}
     if default is dataclasses.MISSING:
         return field(metadata=md)
     if isinstance(default, (list, tuple)):
@@ -40,7 +53,9 @@ class Cycloid:
     pin_circle_radius_mm: float = _f(0.0)      # R
     pin_radius_mm: float = _f(0.0)             # Rr
     zc: int = _f(2, open_lo=False)              # cycloid teeth
-    zp: int = _f(3, open_lo=False)              # pins
+    zp: int = _f(3, ZP_MAX, open_lo=False,      # pins
+                 why=f"the largest pin count of real cycloid reducers is ~{ZP_MAX} (Sumitomo Cyclo "
+                     f"119:1); the geometry stage's cost grows with zp")
     eccentricity_mm: float = _f(0.0)           # E
     width_mm: float = _f(0.0)                  # one disc's face width
     disc_count: int = _f(1, 2, open_lo=False)   # discs, 180 deg apart when 2
@@ -94,7 +109,8 @@ class Crankshaft:
 @dataclass(frozen=True)
 class Material:
     youngs_modulus_GPa: float = _f(0.0)
-    poisson_ratio: float = _f(0.0, 0.5)
+    poisson_ratio: float = _f(0.0, 0.5, open_lo=False, open_hi=True,
+                              why="0.5 is incompressible: plane-strain FE divides by 1 - 2 nu")
     density_kg_per_m3: float = _f(0.0)
 
 
@@ -206,6 +222,7 @@ def _build(cls: type, data: dict, section: str, source: str) -> Any:
 
 def _check_value(f: dataclasses.Field, value: Any, where: str) -> Any:
     lo, hi, open_lo = f.metadata.get("lo"), f.metadata.get("hi"), f.metadata.get("open_lo", True)
+    open_hi, why = f.metadata.get("open_hi", False), f.metadata.get("why", "")
     want_int = f.type in ("int", int)
     want_tuple = f.type in ("tuple", tuple)
     items = value if want_tuple and isinstance(value, (list, tuple)) else [value]
@@ -219,9 +236,11 @@ def _check_value(f: dataclasses.Field, value: Any, where: str) -> Any:
             raise CaseError(f"{where} = {v!r}: must be a whole number")
         if not math.isfinite(v):
             raise CaseError(f"{where} = {v!r}: must be finite")
-        rng = f"{'(' if open_lo else '['}{lo}, {hi if hi is not None else 'inf'}]"
-        if lo is not None and (v < lo or (open_lo and v == lo)) or hi is not None and v > hi:
-            raise CaseError(f"{where} = {v!r}: outside the allowed range {rng}")
+        rng = f"{'(' if open_lo else '['}{lo}, {hi if hi is not None else 'inf'}{')' if open_hi else ']'}"
+        if lo is not None and (v < lo or (open_lo and v == lo)) \
+                or hi is not None and (v > hi or (open_hi and v == hi)):
+            raise CaseError(f"{where} = {v!r}: outside the allowed range {rng}"
+                            + (f" ({why})" if why else ""))
         checked.append(int(v) if want_int else float(v))
     return tuple(checked) if want_tuple else checked[0]
 
@@ -285,20 +304,47 @@ def validate(case: ReducerCase) -> ReducerCase:
                         f"cuts into the crank holes (allowed < "
                         f"{cr.crank_circle_radius_mm - case.disc.crank_hole_radius_mm:g} mm)")
     _check_errors(case)
-    from geometry.clearance import check_undercut   # local: clearance builds on this module
-    check_undercut(case)                             # < 1 ms: the modified profile must not loop
+    _check_undercut(case)
     return case
+
+
+def _check_undercut(case: ReducerCase) -> None:
+    """The modified profile must not loop: its pin radius Rr + dRr stays below the smallest convex
+    radius of curvature of the (modified) pin-centre curve. (Where the disc is concave, at the
+    roots, an inward offset never loops.)"""
+    c, m = case.cycloid, case.modification
+    rho = min_convex_radius_mm(c.pin_circle_radius_mm + m.offset_mm, c.eccentricity_mm, c.zp)
+    if c.pin_radius_mm + m.equidistant_mm >= rho:
+        raise CaseError(f"{_where('cycloid', 'pin_radius_mm', case.source)} = {c.pin_radius_mm} "
+                        f"(+ equidistant {m.equidistant_mm}): the profile undercuts (loops) at the "
+                        f"tooth tips; allowed modified pin radius < {rho:.4g} mm, the smallest "
+                        f"convex radius of curvature of the pin-centre curve (lower E zp / R or Rr)")
 
 
 def load_case(path: str | Path) -> ReducerCase:
     """Read and validate a case file; raise CaseError naming key, value and allowed range."""
     path = Path(path)
     try:
-        raw = tomllib.loads(path.read_text())
+        if path.is_dir():
+            raise CaseError(f"{path}: is a directory; expected a case file (TOML)")
+        if path.exists() and not path.is_file():
+            raise CaseError(f"{path}: not a regular file; expected a case file (TOML)")
+        if path.exists() and path.stat().st_size > CASE_FILE_MAX_BYTES:
+            raise CaseError(f"{path}: {path.stat().st_size} bytes; a case file is TOML text of at "
+                            f"most {CASE_FILE_MAX_BYTES} bytes")
+        text = path.read_bytes().decode("utf-8-sig")
+        raw = tomllib.loads(text)
     except FileNotFoundError:
         raise CaseError(f"{path}: case file not found") from None
+    except PermissionError:
+        raise CaseError(f"{path}: cannot read the case file (permission denied)") from None
+    except OSError as exc:
+        raise CaseError(f"{path}: cannot read the case file ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"{path}: not a UTF-8 text file (byte {exc.start}); a case file is TOML "
+                        f"text") from None
     except tomllib.TOMLDecodeError as exc:
-        raise CaseError(f"{path}: not valid TOML ({exc})") from None
+        raise CaseError(f"{path}: not valid TOML ({' '.join(str(exc).split())})") from None
     return case_from_dict(raw, source=str(path))
 
 
@@ -311,6 +357,10 @@ def case_from_dict(raw: dict, source: str = "") -> ReducerCase:
     name = raw.get("name")
     if not isinstance(name, str) or not name:
         raise CaseError(f"{source + ': ' if source else ''}name: missing or not a string")
+    if not NAME_PATTERN.fullmatch(name) or name in (".", ".."):
+        raise CaseError(f"{source + ': ' if source else ''}name = {name!r}: must be a plain file-name "
+                        f"token of 1-100 letters, digits, '.', '_' or '-' (not '.' or '..'): it "
+                        f"names the build folder")
     sections = {}
     for sec, cls in SECTIONS.items():
         if sec not in raw and sec != "errors":

@@ -7,10 +7,13 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import multiprocessing
+import os
 import signal
 import sys
 
 from geometry.artifacts import InputError
+from pipeline import checks
 
 # Sub-command -> the module that registers it. Only the module of the command asked for is
 # imported (CadQuery, numba, scikit-fem take seconds to import), so `--help` and errors stay quick.
@@ -27,11 +30,21 @@ COMMANDS = {
     "paper001": ("pipeline.cmd_diagnose", "paper 001's no-load bench case: coaxiality that closes the gap"),
     "report": ("pipeline.cmd_report", "static HTML report of a case"),
 }
+FILE_OUTPUT = {"simulate"}     # `--out` is one file; every other stage's `--out` is a folder
+
+
+class UsageError(InputError):
+    """A command line argparse cannot read (unknown option, missing or malformed value)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):    # one `error:` line and exit 2 like every other user error
+        raise UsageError(f"{message} (`{self.prog} --help` lists the options)")
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser; with `command`, only that command's module is imported and registered."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="python -m pipeline",
         description="FE-informed transmission-error pipeline for RV reducers",
         epilog="commands: " + "; ".join(f"{k}: {h}" for k, (_, h) in COMMANDS.items()))
@@ -44,23 +57,87 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
-def _terminate(signum, frame):
-    # SIGTERM (a killed batch job, `make` interrupted) unwinds like Ctrl-C, so every atomic write
-    # in progress removes its temporary file and no partial artifact is left behind.
-    raise KeyboardInterrupt
+INTERRUPTED = "interrupted: no partial artifact was written (finished parts are kept; rerun to complete)"
+_RUN: dict = {}     # the parsed arguments of this process's run, for the signal handler
+
+
+def _on_signal(signum, frame):
+    """SIGTERM (a killed batch job, `make` interrupted) or Ctrl-C: stop now, leave nothing behind.
+
+    Raising KeyboardInterrupt wherever the main thread happens to be is not safe: inside a C
+    callback it can crash the process, a library's broad `except` can swallow it (the run then
+    goes on for minutes), and it can leave the interpreter exiting by SIGINT after it was handled.
+    So the handler ends the run itself: it terminates the pool workers, removes the temporaries
+    of this run's --out (finished artifacts were renamed into place and stay) and exits with
+    128 + signum. Commands without --out unwind by KeyboardInterrupt as before."""
+    if _RUN.get("pid", os.getpid()) != os.getpid():   # a forked worker before its own handlers are set
+        os._exit(128 + signum)
+    args = _RUN.get("args")
+    if args is not None and getattr(args, "out", None) is None:
+        raise KeyboardInterrupt(signum)
+    children = multiprocessing.active_children()
+    for child in children:
+        child.terminate()
+    for child in children:
+        child.join(timeout=5)
+    if args is not None:
+        _clear_temps(args)
+    try:    # the main thread may have been stopped inside a write to these very streams
+        sys.stdout.flush()
+        print(INTERRUPTED, file=sys.stderr, flush=True)
+    except (RuntimeError, OSError, ValueError):
+        pass
+    os._exit(128 + signum)
+
+
+def _check_output(args) -> None:
+    """Refuse an unusable --out before anything runs, then clear what a killed run left there."""
+    out = getattr(args, "out", None)
+    if out is None:
+        return
+    if args.command in FILE_OUTPUT:
+        path = checks.out_file("--out", out)
+        checks.remove_stale_temps(path.parent, target=path.name)
+    else:
+        checks.remove_stale_temps(checks.out_folder("--out", out))
+
+
+def _clear_temps(args) -> None:
+    """After an interrupt: the temporaries of this run's --out (killed workers, unfinished writes)."""
+    out = getattr(args, "out", None)
+    try:
+        if out is not None and args.command in FILE_OUTPUT:
+            checks.remove_stale_temps(os.path.dirname(os.fspath(out)) or ".", target=os.path.basename(out))
+        elif out is not None:
+            checks.remove_stale_temps(out)
+    except OSError:
+        pass
 
 
 def main(argv: list[str] | None = None) -> int:
+    if argv is None:   # a real process, not a call from Python code: act on signals from the start
+        signal.signal(signal.SIGTERM, _on_signal)
+        signal.signal(signal.SIGINT, _on_signal)
     words = sys.argv[1:] if argv is None else argv
-    parser = build_parser(next((w for w in words if not w.startswith("-")), None))
-    args = parser.parse_args(argv)
-    if argv is None:   # a real process, not a call from Python code
-        signal.signal(signal.SIGTERM, _terminate)
+    args = None
     try:
+        parser = build_parser(next((w for w in words if not w.startswith("-")), None))
+        args = parser.parse_args(argv)
+        _check_output(args)
+        if argv is None:
+            _RUN.update(args=args, pid=os.getpid())
         return int(args.func(args) or 0)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("interrupted: no partial artifact was written", file=sys.stderr)
-        return 130
+    except OSError as exc:
+        if exc.filename is None:    # not about a path the user gave or made: a bug, keep the traceback
+            raise
+        print(f"error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:
+        if args is not None:
+            _clear_temps(args)
+        print(INTERRUPTED, file=sys.stderr)
+        signum = exc.args[0] if exc.args and isinstance(exc.args[0], int) else signal.SIGINT
+        return 128 + int(signum)

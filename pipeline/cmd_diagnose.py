@@ -44,9 +44,12 @@ def run_paper001(args) -> int:
     from geometry.params import load_case
     from pipeline.diagnosis.paper001 import worked_example
     case = load_case(args.case)
-    ex = worked_example(case, for_case(case, args.stiffness))
+    from geometry.fingerprint import made_from
+    stiffness = for_case(case, args.stiffness)
+    ex = worked_example(case, stiffness)
     path = Path(args.out) / "paper001.json"
-    write_json_atomic(path, {"case": case.name, **ex})
+    write_json_atomic(path, {"case": case.name, **ex, "made_from": made_from(
+        case, "rv-paper001/1", stiffness=stiffness.made_from).to_json()})
     if not args.quiet:
         print(f"paper001 {case.name}: simulated no-load peak-to-peak {ex['simulated_pp_arcsec']:.3f} arcsec "
               f"vs measured {ex['measured_arcsec']} arcsec: closed by {ex['coaxiality_closing_um']:.2f} um "
@@ -54,14 +57,28 @@ def run_paper001(args) -> int:
     return 0
 
 
+MAX_POINTS_PER_REV = 16384   # 16x the default: the model is solved at every simulated point
+
+
+def check_points_per_rev(value: int, case) -> int:
+    """Enough points per output revolution to resolve the crank order zp (Nyquist), at most MAX."""
+    lo = 2 * case.cycloid.zp + 2
+    if not lo <= value <= MAX_POINTS_PER_REV:
+        raise DiagnoseError(f"--points-per-rev = {value}: allowed {lo} to {MAX_POINTS_PER_REV} (at least "
+                            f"2 zp + 2 to resolve the zp = {case.cycloid.zp} crank order; each point is a "
+                            "model solve)")
+    return value
+
+
 def run(args) -> int:
     from fem.stiffness import for_case
     from geometry.params import load_case
+    case = load_case(args.case)     # options first, before the diagnosis machinery is imported
+    check_points_per_rev(args.points_per_rev, case)
     from pipeline.diagnosis.diagnose import diagnose
     from pipeline.diagnosis.report import write_report
     from pipeline.diagnosis.simulate import quasi_static_te
-    from pipeline.records import parse_column_map, read_record
-    case = load_case(args.case)
+    from dynamics.records import parse_column_map, read_record
     stiffness = for_case(case, args.stiffness)
     cols = parse_column_map(args.columns) if args.columns else None
     records = [read_record(p, cols, header=not args.no_header) for p in args.measured]
@@ -75,10 +92,21 @@ def run(args) -> int:
     finally:
         if bar is not None:
             bar.close()
+    _add_made_from(Path(args.out) / "diagnosis.json", case, stiffness, args.measured)  # before the target
     out = write_report(diag, case, args.out)
     if not args.quiet:
         print(summary_line(diag, out))
     return 0
+
+
+def _add_made_from(path: Path, case, stiffness, records: list[str]) -> None:
+    """What diagnosis.json was made from (the case, the stiffness, each bench record), in the sidecar
+    diagnosis_made_from.json: diagnosis.json itself keeps exactly DESIGN.md's keys."""
+    from geometry.artifacts import write_json_atomic
+    from geometry.fingerprint import file_fingerprint, made_from
+    inputs = {f"record{k + 1}:{Path(r).name}": file_fingerprint(r) for k, r in enumerate(records)}
+    write_json_atomic(Path(path).with_name("diagnosis_made_from.json"), {"made_from": made_from(
+        case, "rv-diagnosis/1", stiffness=stiffness.made_from, **inputs).to_json()})
 
 
 def _ticking(te_model, bar):

@@ -8,6 +8,7 @@ The stiffness comes from the FEM stage (default build/<case name>/fem/stiffness.
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import time
 from pathlib import Path
@@ -26,6 +27,17 @@ def _model(args):
     return build_model(case, load(path)), path
 
 
+def _made_from(model, artifact: str):
+    """Provenance of an output of this stage: the case and the stiffness it was computed from."""
+    from geometry.fingerprint import made_from
+    return made_from(model.case, artifact, stiffness=model.stiffness.made_from)
+
+
+def _default_dt_s() -> float:
+    from dynamics.model import DEFAULT_DT_S    # numba: imported once the cheap checks have passed
+    return DEFAULT_DT_S
+
+
 def _say(args, msg: str) -> None:
     if not args.quiet:
         print(msg, flush=True)
@@ -33,21 +45,38 @@ def _say(args, msg: str) -> None:
 
 def cmd_simulate(args) -> int:
     from dynamics.loads import LoadSpec
+    from pipeline import checks
+    load = LoadSpec.parse(args.load)     # every option checked before the model is imported
+    checks.input_speed(args.speed_rpm)
+    checks.run_length(args.duration, args.dt, _default_dt_s)
     from dynamics.model import simulate
-    load = LoadSpec.parse(args.load)
+    from dynamics.records import write_te_result
     model, spath = _model(args)
+    # DESIGN.md: the input speed defaults to the case's [operation] input_speed_rpm
+    speed = model.case.operation.input_speed_rpm if args.speed_rpm is None else args.speed_rpm
     t0 = time.perf_counter()
-    res = simulate(model, load, duration_s=args.duration, input_speed_rpm=args.speed_rpm,
+    res = simulate(model, load, duration_s=args.duration, input_speed_rpm=speed,
                    direction=-1 if args.backward else 1, dt_s=args.dt, store_pin_forces=False)
     wall = time.perf_counter() - t0
-    res.to_record(args.out, comments=[
+    made = _made_from(model, "rv-record/1")
+    write_te_result(args.out, res, comments=[
         f"simulated by rvte dynamics: case {model.case.name}, load {load}, "
         f"speed {res.meta['input_speed_rpm']:g} rpm, {'backward' if args.backward else 'forward'}",
         f"stiffness {spath}; dt {res.meta['dt_s']:g} s; {res.meta['solver']}",
+        f"made_from: case {made.case_fingerprint}, stiffness {dict(made.inputs)['stiffness']}",
         "encoder_zero: simulation (TE = 0 at the unloaded kinematic zero)"])
-    _say(args, f"simulate: {args.out}: {res.t_s[-1]:.3g} s simulated in {wall:.1f} s, "
-               f"TE sigma (t >= 2 s) = {res.std_arcsec(2.0) if res.t_s[-1] >= 2 else res.std_arcsec():.4g} arcsec")
+    _say(args, f"simulate: {args.out}: {res.t_s[-1]:.3g} s simulated in {wall:.1f} s, " + _sigma_text(res))
     return 0
+
+
+def _sigma_text(res) -> str:
+    """TE sigma over the steady window, or why there is none (a run that ends before it starts)."""
+    from dynamics.matrix import STEADY_FROM_S as steady_from_s
+    steady = res.t_s >= steady_from_s
+    if steady.any():
+        return f"TE sigma (t >= {steady_from_s:g} s) = {res.std_arcsec(steady_from_s):.4g} arcsec"
+    return (f"no steady TE sigma: the window t >= {steady_from_s:g} s is empty in a {res.t_s[-1]:.3g} s run "
+            f"(whole run incl. the ramps: sigma {res.std_arcsec():.4g} arcsec)")
 
 
 def _plot_te(results, case, out: Path) -> None:
@@ -75,17 +104,21 @@ def _plot_te(results, case, out: Path) -> None:
 def cmd_matrix(args) -> int:
     from dynamics.loads import FORMS
     from dynamics.matrix import (PAPER_001_SIGMA_ARCSEC, STEADY_FROM_S, TORQUES_NM, characteristic_orders,
-                                 run_case, sigma_table)
-    from pipeline.sweep import run_tasks
+                                 run_matrix, sigma_table)
+    from pipeline import checks
+    from pipeline.sweep import check_scheduler, run_tasks
+    check_scheduler(args.scheduler)
+    checks.run_length(args.duration, args.dt, _default_dt_s)
     model, spath = _model(args)
     case = model.case
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    tasks = [(str(Path(args.case).resolve()), str(spath.resolve()), form, T, args.duration, str(out.resolve()),
-              args.dt) for T in TORQUES_NM for form in FORMS]
     t0 = time.perf_counter()
-    results = run_tasks(run_case, tasks, scheduler=args.scheduler,
-                        progress=None if args.quiet else lambda i, n: print(f"matrix: {i}/{n}", flush=True))
+    runner = functools.partial(run_tasks, scheduler=args.scheduler,
+                               progress=None if args.quiet else lambda i, n: print(f"matrix: {i}/{n}", flush=True))
+    # each cell is its own artifact: finished cells with the same inputs are reused (resume)
+    results, reused = run_matrix(str(Path(args.case).resolve()), str(spath.resolve()), args.duration,
+                                 str(out.resolve()), args.dt, runner)
     wall = time.perf_counter() - t0
     tab, whole = sigma_table(results), sigma_table(results, "sigma_whole_arcsec")
     last = sigma_table(results, "sigma_last_rev_arcsec")
@@ -95,7 +128,7 @@ def cmd_matrix(args) -> int:
     kind = "TEST STAND-IN" if "STAND-IN" in str(model.stiffness.sources) else "FE"
     lines = ["# TE standard deviation: this model beside paper 001", "",
              f"Case `{case.name}`, stiffness `{spath}` ({kind}), {args.duration:g} s per run, population "
-             f"sigma (paper 001's formula) [arcsec]. Matrix wall time {wall:.1f} s.", "",
+             "sigma (paper 001's formula) [arcsec].", "",
              f"Windows: **steady** t >= {STEADY_FROM_S:g} s (after the speed and load ramps; `te_std.csv`), "
              "**last rev** the last full output revolution of the run (`te_std_last_rev.csv`; 2.95..7 s at "
              "88.89 deg/s), **whole** the whole run including the ramps (`te_std_whole.csv`).", "",
@@ -129,10 +162,14 @@ def cmd_matrix(args) -> int:
     for r in results:
         lines.append(f"| {r['name']} | " + " | ".join(f"{r['lines'].get(k, float('nan')):.3g}" for k in orders) + " |")
     write_text_atomic(out / "comparison.md", "\n".join(lines) + "\n")
-    write_json_atomic(out / "matrix.json", {"wall_s": wall, "runs": [
+    # matrix.json is te_std.csv's sidecar: what the table was made from
+    write_json_atomic(out / "matrix.json", {"made_from": _made_from(model, "rv-matrix/1").to_json(),
+                                            "runs": [
         {k: v for k, v in r.items() if k != "spectrum"} for r in results]})
     _plot_te(results, case, out)
-    _say(args, f"matrix: {out}/te_std.csv, comparison.md ({wall:.1f} s wall)")
+    short = "" if args.duration >= STEADY_FROM_S else f"; runs end before t = {STEADY_FROM_S:g} s: no steady sigma (nan)"
+    _say(args, f"matrix: {out}/te_std.csv, comparison.md ({len(results) - reused} cells computed, {reused} reused "
+               f"from an earlier run; {wall:.1f} s wall{short})")
     return 0
 
 
@@ -158,7 +195,8 @@ def cmd_hysteresis(args) -> int:
     res = hysteresis(model)
     out = Path(args.out)
     write_json_atomic(out / "hysteresis.json", {"case": model.case.name, "stiffness": str(spath),
-                                                **res.summary()})
+                                                **res.summary(),
+                                                "made_from": _made_from(model, "rv-hysteresis/1").to_json()})
     buf = io.StringIO()
     np.savetxt(buf, np.column_stack([res.torque_Nm, res.output_angle_arcmin]), delimiter=",",
                header="output_torque_Nm,output_angle_arcmin", comments="", fmt="%.8g")
@@ -188,7 +226,8 @@ def register(sub) -> None:
     _common(p)
     p.add_argument("--load", required=True, help="FORM:TORQUE_NM, FORM in constant, square, sine")
     p.add_argument("--duration", type=float, default=7.0, help="seconds (default 7, paper 001)")
-    p.add_argument("--speed-rpm", type=float, default=None, help="input speed (default 1200, paper 001)")
+    p.add_argument("--speed-rpm", type=float, default=None,
+                   help="input speed [rpm] (default: the case's [operation] input_speed_rpm)")
     p.add_argument("--backward", action="store_true", help="run backward (record torque negative)")
     p.add_argument("--dt", type=float, default=None, help="time step [s] (default 1e-4)")
     p.add_argument("--out", required=True, help="record CSV")

@@ -50,8 +50,9 @@ def run_mesh(args) -> int:
     """The mesh stage: the 3D crankshaft tets (the slow, load-independent part of the FE stage),
     as .npz for `fem --mesh` and .vtu for ParaView. The 2D tooth mesh depends on the contact
     positions and Hertz widths, so the fem stage makes it itself (seconds)."""
-    from fem.mesh import save_mesh3d, write_vtu
+    from fem.mesh import MESH_SCHEMA, save_mesh3d, write_vtu
     from fem.shaft import crankshaft_fingerprint, crankshaft_mesh, default_edge_length_m
+    from geometry.fingerprint import made_from
     from geometry.params import load_case
     if args.crank_edge_mm is not None and not (args.crank_edge_mm > 0):
         raise InputError(f"--crank-edge-mm = {args.crank_edge_mm}: must be positive")
@@ -61,8 +62,8 @@ def run_mesh(args) -> int:
     m3 = crankshaft_mesh(case, h)
     out = Path(args.out)
     write_vtu(out / "crankshaft_mesh.vtu", m3.points, m3.tetrahedra)
-    save_mesh3d(out / MESH_FILE, m3, case=case.name, fingerprint=crankshaft_fingerprint(case),
-                edge_length_m=h)
+    save_mesh3d(out / MESH_FILE, m3, made_from=made_from(case, MESH_SCHEMA), case=case.name,
+                fingerprint=crankshaft_fingerprint(case), edge_length_m=h)
     if not args.quiet:
         print(f"mesh {case.name}: crankshaft {len(m3.points)} nodes, {len(m3.tetrahedra)} tets, edge "
               f"{h * 1e3:.2f} mm; {time.perf_counter() - t0:.0f} s -> {out / MESH_FILE}")
@@ -96,8 +97,11 @@ def _benchmark(args, out: Path) -> int:
 
 
 def _case(args, out: Path) -> int:
+    import dataclasses
+
     from fem import stiffness
     from fem.reduce import build_stiffness
+    from geometry.fingerprint import made_from
     from geometry.params import load_case
     t0 = time.perf_counter()
     case = load_case(args.case)
@@ -105,7 +109,8 @@ def _case(args, out: Path) -> int:
     if args.mesh:
         from fem.mesh import load_mesh3d
         from fem.shaft import crankshaft_fingerprint
-        crank_mesh = load_mesh3d(Path(args.mesh) / MESH_FILE, fingerprint=crankshaft_fingerprint(case))
+        crank_mesh = load_mesh3d(Path(args.mesh) / MESH_FILE, case=case,
+                                 fingerprint=crankshaft_fingerprint(case))
     from functools import partial
     from pipeline.sweep import run_tasks
     if args.workers < 1:
@@ -113,7 +118,9 @@ def _case(args, out: Path) -> int:
     runres = build_stiffness(case, mesh_size_m=None if args.mesh_size_mm is None else args.mesh_size_mm * 1e-3,
                              crank_mesh=crank_mesh,
                              map_tasks=partial(run_tasks, workers=args.workers, scheduler=args.scheduler))
-    stiffness.save(runres.model, out / "stiffness.json")
+    # what it was made from: the case and, when reused, the mesh stage's mesh
+    prov = made_from(case, stiffness.SCHEMA, mesh=crank_mesh.made_from if crank_mesh is not None else None)
+    stiffness.save(dataclasses.replace(runres.model, made_from=prov), out / "stiffness.json")
     _write_meshes(runres, out)
     _pictures(runres, out)
     if not args.quiet:

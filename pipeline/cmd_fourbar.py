@@ -28,6 +28,9 @@ LABELS = {"eccentricity": "crank eccentricity (l1, crank A)", "crank_hole": "dis
           "output_hole": "output bearing-hole spacing (l4)",
           "eccentricity_common": "crank eccentricity, both cranks (l1 = l3)"}
 PAPER_L4_MM = 72.0   # l4 that reproduces paper 000's printed numbers (the paper does not state it)
+MAX_POINTS = 1001    # sweep points per axis: a pair sweep is points^2 builds (1e6 at the limit)
+MAX_SAMPLES = 10_000_000
+MAX_LIMIT_ARCSEC = 3600.0   # a 1 deg accuracy limit is already no limit for a precision reducer
 
 
 # ---------------------------------------------------------------- shared inputs
@@ -35,6 +38,12 @@ PAPER_L4_MM = 72.0   # l4 that reproduces paper 000's printed numbers (the paper
 def _stiffness(case: ReducerCase, path: str | None):
     from fem.stiffness import for_case
     return for_case(case, path)
+
+
+def _made_from(case: ReducerCase, args, artifact: str) -> dict:
+    """What an output was made from: the case and the stiffness file (geometry.fingerprint)."""
+    from geometry.fingerprint import made_from
+    return made_from(case, artifact, stiffness=_stiffness(case, args.stiffness).made_from).to_json()
 
 
 def _check_range(name: str, value: float, lo: float, hi: float) -> float:
@@ -80,12 +89,17 @@ def loads_from_dynamics(dm, case: ReducerCase, geom: fb.PairGeometry, stiffness,
                         f"dynamics.model.solve_static (input {dpsi / rate:.3f} deg)")
 
 
-def _setup(args, case: ReducerCase):
-    stiff = _stiffness(case, args.stiffness)
-    geom = fb.PairGeometry.from_case(case)
+def _check_load(args, case: ReducerCase) -> tuple[float, float]:
+    """(torque [N m], crank angle [rad]) of the elastic error, checked against the case."""
     torque = case.rated_torque_Nm if args.torque_Nm is None else args.torque_Nm
     _check_range("--torque-Nm", torque, 0.0, 10 * case.rated_torque_Nm)
-    beta1 = math.radians(_check_range("--crank-angle-deg", args.crank_angle_deg, 1.0, 179.0))
+    return torque, math.radians(_check_range("--crank-angle-deg", args.crank_angle_deg, 1.0, 179.0))
+
+
+def _setup(args, case: ReducerCase):
+    torque, beta1 = _check_load(args, case)
+    stiff = _stiffness(case, args.stiffness)
+    geom = fb.PairGeometry.from_case(case)
     loads = pair_loads(case, geom, stiff, beta1, torque)
     return geom, loads, fb.JointCompliance.from_stiffness(stiff)
 
@@ -121,8 +135,11 @@ def run_fourbar(args) -> int:
     case = load_case(args.case)
     out = Path(args.out)
     _check_range("--range-mm", args.range_mm, 1e-4, 0.5)
-    if args.points < 3:
-        raise InputError(f"--points = {args.points}: need at least 3")
+    if not 3 <= args.points <= MAX_POINTS:
+        raise InputError(f"--points = {args.points}: allowed 3 to {MAX_POINTS} (each pair sweep is points^2 builds)")
+    for opt in ("turning_arm_clearance_um", "support_clearance_um"):
+        if getattr(args, opt) is not None:
+            _check_range("--" + opt.replace("_", "-"), getattr(args, opt), 0.0, tol.MAX_BAND_UM)
     geom, loads, comp = _setup(args, case)
     e = case.errors
     base = fb.Build(turning_arm_clearance_mm=(1e-3 * (args.turning_arm_clearance_um if args.turning_arm_clearance_um
@@ -166,6 +183,7 @@ def run_fourbar(args) -> int:
                       comparison_md(case, geom, loads, base, dev, singles, pairs, paper72, scan, args))
     _figures(out, dev, singles, pairs, scan)
     write_json_atomic(out / "fourbar.json", {
+        "made_from": _made_from(case, args, "rv-fourbar/1"),
         "case": case.name, "torque_Nm": loads.torque_Nm, "crank_angle_deg": math.degrees(loads.beta1_rad),
         "force_source": loads.source, "l4_mm": geom.spacing_mm, "eccentricity_mm": geom.eccentricity_mm,
         "turning_arm_force_N": loads.turning_arm_N.tolist(), "support_force_N": loads.support_N.tolist(),
@@ -340,18 +358,26 @@ def _figures(out: Path, dev, singles, pairs, scan) -> None:
 # ---------------------------------------------------------------- tolerance
 
 def bands_from_args(args) -> tol.ToleranceBands:
+    for field in ("eccentricity_um", "crank_hole_um", "output_hole_um", "turning_arm_clearance_um",
+                  "support_clearance_um"):   # named by their options (ToleranceBands names its fields)
+        _check_range("--" + field.replace("_", "-"), getattr(args, field), 0.0, tol.MAX_BAND_UM)
     return tol.ToleranceBands(args.eccentricity_um, args.crank_hole_um, args.output_hole_um,
                               args.turning_arm_clearance_um, args.support_clearance_um, args.distribution)
 
 
 def run_tolerance(args) -> int:
-    from pipeline.sweep import run_tasks
-    case = load_case(args.case)
-    if args.samples < 1 or args.samples > 10_000_000:
-        raise InputError(f"--samples = {args.samples}: allowed 1 to 10000000")
-    if args.seed < 0:
-        raise InputError(f"--seed = {args.seed}: must be >= 0")
+    from pipeline.checks import int_in, number_in
+    from pipeline.sweep import check_scheduler, run_tasks
+    int_in("--samples", args.samples, 1, MAX_SAMPLES)
+    int_in("--seed", args.seed, 0, 2 ** 63 - 1)
+    if args.workers is not None:
+        int_in("--workers", args.workers, 1, 256, "local processes")
+    int_in("--chunk-size", args.chunk_size, 1, MAX_SAMPLES, "samples per task")
+    number_in("--limit-arcsec", args.limit_arcsec, 0.0, MAX_LIMIT_ARCSEC, "arcsec", lo_open=True,
+              why="the output error a good build stays within")
+    check_scheduler(args.scheduler)
     bands = bands_from_args(args)
+    case = load_case(args.case)
     geom, loads, comp = _setup(args, case)
     task = tol.ChunkTask(geom, loads, comp, bands, int(args.seed))
     runner = functools.partial(run_tasks, workers=args.workers, scheduler=args.scheduler)
@@ -360,7 +386,8 @@ def run_tolerance(args) -> int:
                           limit_arcsec=args.limit_arcsec)
     wall = time.perf_counter() - t0
     out = Path(args.out)
-    summary = {"case": case.name, **res.summary(), "wall_s": wall,
+    # no wall time in the artifact (same inputs, same bytes): it goes to the log line below
+    summary = {"case": case.name, "made_from": _made_from(case, args, "rv-tolerance/1"), **res.summary(),
                "runner": f"dask {args.scheduler}" if args.scheduler else f"local processes ({args.workers or 'auto'})"}
     write_json_atomic(out / "summary.json", summary)
     rows = [[f"{v:.6g}" for v in r] for r in res.samples]

@@ -18,11 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from geometry import clearance, solids
 from geometry.artifacts import write_json_atomic, write_text_atomic
-from geometry.export import check_valid, export_solid
+from geometry.fingerprint import made_from
 from geometry.params import ReducerCase, load_case
 from geometry.profile import disc_profile, profile_args
+# geometry.solids / export (CadQuery) and clearance (scipy) are imported where used: the CLI
+# imports this module before it checks the options, and a bad option must fail in a second.
 
 PROFILE_POINTS = 4000          # profile.csv rows (+1 closing row); the contract asks >= 2000
 PICTURE_CRANK_ANGLE_DEG = 0.0
@@ -64,6 +65,7 @@ def profile_csv(case: ReducerCase, n: int = PROFILE_POINTS) -> str:
 
 def measure(case: ReducerCase, disc) -> GeometryFigures:
     """Figures of one case; `disc` is the solid of `solids.disc_solid(case)`."""
+    from geometry import clearance, solids
     vol = solids.disc_volume_bounds(case)
     bl = clearance.backlash(case, math.radians(0.0))
     cf = clearance.closed_form_backlash(case, 0.0)
@@ -97,6 +99,7 @@ def render_assembly(case: ReducerCase, path: Path, crank_angle_deg: float = PICT
     """Off-screen picture of the assembled stage (half the housing cut away to show the mesh)."""
     import pyvista as pv
 
+    from geometry import solids
     from pipeline.render import plotter, screenshot
     p = plotter()
     for name, shape in solids.assembly(case, crank_angle_deg):
@@ -117,6 +120,8 @@ def render_assembly(case: ReducerCase, path: Path, crank_angle_deg: float = PICT
 
 def run_geometry(case: ReducerCase, out: Path, *, quiet: bool = False) -> GeometryFigures:
     """Build, check and write every artifact of the geometry stage for one case."""
+    from geometry import solids
+    from geometry.export import check_valid, export_solid
     t0 = time.perf_counter()
     say = (lambda *a: None) if quiet else (lambda *a: print(*a, flush=True))
     out = Path(out)
@@ -130,7 +135,8 @@ def run_geometry(case: ReducerCase, out: Path, *, quiet: bool = False) -> Geomet
     say(f"geometry {case.name}: solids exported ({time.perf_counter() - t0:.1f} s)")
     figures = measure(case, disc)
     render_assembly(case, out / "assembly.png")
-    write_json_atomic(out / "geometry.json", dataclasses.asdict(figures))
+    write_json_atomic(out / "geometry.json", {**dataclasses.asdict(figures),
+                                              "made_from": made_from(case, "rv-geometry/1").to_json()})
     say(f"geometry {case.name}: disc volume {figures.disc_volume_mm3:.1f} mm^3 (reference "
         f"{figures.disc_volume_reference_mm3:.1f}), CAD deviation {figures.cad_profile_deviation_um:.3f} um, "
         f"min clearance {figures.min_clearance_um:.2f} um, backlash {figures.backlash_total_arcmin:.3f} "

@@ -1,15 +1,31 @@
-"""`python -m pipeline report --case CASE.toml [--build DIR]`: the static HTML report of a case."""
+"""`python -m pipeline report --case CASE.toml [--build DIR]`: the static HTML report of a case.
+
+The page goes to <build>/<case name>/report/index.html and nowhere else: the case name (validated
+by geometry.params) must be one plain folder right under the build folder.
+"""
 from __future__ import annotations
 
 from pathlib import Path
 
+from geometry.artifacts import InputError
+from geometry.fingerprint import case_fingerprint
 from geometry.params import load_case
 from pipeline.report import build_report
 
 
+def case_folder(build: str | Path, name: str) -> Path:
+    """<build>/<name>, refused unless it is exactly one folder level below the build folder."""
+    build = Path(build)
+    folder = build / name
+    if Path(name).name != name or name in ("", ".", "..") or folder.resolve().parent != build.resolve():
+        raise InputError(f"case name {name!r}: the report would leave the build folder {build}; "
+                         f"allowed: a plain folder name (letters, digits, . _ -)")
+    return folder
+
+
 def run(args) -> int:
     case = load_case(args.case)
-    path = build_report(Path(args.build) / case.name, case.name)
+    path = build_report(case_folder(args.build, case.name), case.name, case_fingerprint(case))
     if not args.quiet:
         print(f"report: {path}")
     return 0

@@ -2,7 +2,9 @@
 
 The page links the stage artifacts in place (relative paths), so it opens from disk in any browser
 with no server, and it only reads: every figure and table comes from a stage that already wrote it.
-A stage whose artifacts are missing is listed as "not built" instead of failing the report.
+A stage whose artifacts are missing is listed as "not built" instead of failing the report; a JSON
+artifact whose `made_from` names another case fingerprint than the report's case is flagged as made
+from another case (or an older version of it) rather than shown as if it were current.
 An inline script marks the body with how many images loaded (data-images-ok="loaded/total"), which
 the headless-browser test reads.
 """
@@ -15,7 +17,8 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from geometry.artifacts import write_text_atomic
+from geometry.artifacts import InputError, write_text_atomic
+from geometry.fingerprint import Provenance, short
 
 
 @dataclass(frozen=True)
@@ -148,8 +151,32 @@ window.addEventListener('load', function () {
 </script>"""
 
 
-def build_report(case_dir: str | Path, case_name: str | None = None) -> Path:
-    """Write <case_dir>/report/index.html over the artifacts present; return its path."""
+def _stale_note(path: Path, case_fingerprint: str | None) -> str:
+    """A warning when a JSON artifact says (geometry.fingerprint) it was made from another case
+    fingerprint, or carries a made_from that does not check out."""
+    if case_fingerprint is None:
+        return ""
+    try:
+        made = json.loads(path.read_text()).get("made_from")
+    except (ValueError, AttributeError, OSError):
+        return ""
+    if made is None:
+        return ""
+    try:
+        prov = Provenance.from_json(made, path.name)
+    except InputError as exc:
+        return f"<p class='missing'>{html.escape(str(exc))}</p>"
+    if prov.case_fingerprint == case_fingerprint:
+        return ""
+    return (f"<p class='missing'>{html.escape(path.name)} was made from case {html.escape(prov.case_name)} "
+            f"(fingerprint {short(prov.case_fingerprint)}), not from this case as it is now (fingerprint "
+            f"{short(case_fingerprint)}): rebuild it (make)</p>")
+
+
+def build_report(case_dir: str | Path, case_name: str | None = None,
+                 case_fingerprint: str | None = None) -> Path:
+    """Write <case_dir>/report/index.html over the artifacts present; return its path. With the
+    case's fingerprint, artifacts made from another version of the case are flagged."""
     case_dir = Path(case_dir)
     out_dir = case_dir / "report"
     name = case_name or case_dir.name
@@ -165,6 +192,7 @@ def build_report(case_dir: str | Path, case_name: str | None = None) -> Path:
         if not folder.is_dir():
             parts.append(f"<p class='missing'>not built (no {sec.folder}/ folder)</p>")
             continue
+        parts.extend(_stale_note(p, case_fingerprint) for p in sorted(folder.glob("*.json")))
         for t in sec.tables:
             if (folder / t).exists():
                 parts.append(f"<h4>{html.escape(t)}</h4>" + _table(folder / t))

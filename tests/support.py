@@ -21,9 +21,10 @@ import math
 import numpy as np
 
 from fem import hertz
-from fem.stiffness import PinContact, StiffnessModel, TurningArm
+from fem.stiffness import SCHEMA, PinContact, StiffnessModel, TurningArm
+from geometry.fingerprint import made_from
+from geometry import pin_profile
 from geometry.params import ReducerCase
-from geometry.profile import cycloid_xy
 
 ISO_C_PRIME_N_PER_MM_UM = 14.0   # ISO 6336-1 single-pair tooth stiffness, solid spur gears
 PIN_LOADS_N = np.geomspace(50.0, 3000.0, 8)
@@ -32,17 +33,11 @@ DISC_DATUM_DEPTH_M = 3e-3
 
 
 def _profile_curvature_radius_m(case: ReducerCase, t: np.ndarray) -> np.ndarray:
-    """Signed curvature radius of the nominal profile (convex > 0) by central differences."""
+    """Signed curvature radius of the nominal profile (convex > 0) at parameter t [m]: the
+    analytic curvature of the pin-centre curve, offset by the pin radius (geometry.pin_profile)."""
     c = case.cycloid
-    args = dict(R=c.pin_circle_radius_mm, Rr=c.pin_radius_mm, E=c.eccentricity_mm, zp=c.zp)
-    h = 1e-5
-    x0, y0 = cycloid_xy(t, **args)
-    xp, yp = cycloid_xy(t + h, **args)
-    xm, ym = cycloid_xy(t - h, **args)
-    dx, dy = (xp - xm) / (2 * h), (yp - ym) / (2 * h)
-    ddx, ddy = (xp - 2 * x0 + xm) / h ** 2, (yp - 2 * y0 + ym) / h ** 2
-    kappa = (dx * ddy - dy * ddx) / (dx * dx + dy * dy) ** 1.5
-    return -1e-3 / kappa    # the profile runs clockwise: negative signed curvature is convex
+    kappa = pin_profile.curvature_per_mm(t, c.pin_circle_radius_mm, c.eccentricity_mm, c.zp)
+    return pin_profile.profile_curvature_radius_mm(kappa, c.pin_radius_mm) * 1e-3
 
 
 def contact_ratio(case: ReducerCase) -> float:
@@ -100,7 +95,8 @@ def stiffness_for_tests(case: ReducerCase) -> StiffnessModel:
         involute_mesh_stiffness_variation=1.0 / eps,
         involute_mesh_contact_ratio=eps,
         sources={"all": "tests/support.py closed-form TEST STAND-IN (Hertz/Johnson, Palmgren, beam "
-                        "theory, ISO 6336-1), not FE"})
+                        "theory, ISO 6336-1), not FE"},
+        made_from=made_from(case, SCHEMA))   # fingerprinted like the fem stage's file
 
 
 def case_path(name: str = "rv40e-81"):

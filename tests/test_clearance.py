@@ -7,6 +7,7 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 from geometry import clearance as cl
+from geometry import pin_profile as pp
 from geometry.params import CaseError, load_case
 from geometry.profile import cycloid_xy, profile_args
 
@@ -185,3 +186,122 @@ def test_shipped_cases_keep_their_pins_inside_the_undercut_limit(name):
     cs = case(name)
     a = profile_args(cs)
     assert a["Rr"] < cl.min_convex_radius_mm(a["R"], a["E"], a["zp"])
+
+
+# ----------------------------------------------------------------------------- the kernel's two forms
+def pin_points(cs, psi, disc_rotation_rad=0.0):
+    """Actual pin centres in the disc frame (DESIGN.md pose), as clearance.pin_contacts places them."""
+    c = cs.cycloid
+    theta = -psi / c.zc + disc_rotation_rad
+    rel = cl.pin_centres_mm(cs) - c.eccentricity_mm * np.array([np.cos(psi), np.sin(psi)])
+    ct, st = np.cos(-theta), np.sin(-theta)
+    return ct * rel[:, 0] - st * rel[:, 1], st * rel[:, 0] + ct * rel[:, 1]
+
+
+def dense_distance(qx, qy, R, E, zp):
+    """Reference: |c(t) - q| minimised directly over u = t - t_i, bounded around the best t_i of
+    400000 samples (xatol 1e-15 rad; u near 0 keeps Brent's relative tolerance from limiting
+    it); independent of the Newton kernels."""
+    tg = np.linspace(0, 2 * np.pi, 400000, endpoint=False)
+    xg, yg = pp.theoretical_curve(tg, R, E, zp)
+    out = []
+    for x, y in zip(qx, qy):
+        i = np.argmin((xg - x) ** 2 + (yg - y) ** 2)
+        f = lambda u: math.hypot(*(np.array(pp.theoretical_curve(tg[i] + u, R, E, zp)) - (x, y)))  # noqa: E731
+        out.append(minimize_scalar(f, bounds=(-2e-5, 2e-5), method="bounded",
+                                   options={"xatol": 1e-15}).fun)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("psi, turn", [(0.0, 0.0), (0.37, 0.0), (0.1, 3e-4), (0.1, -3e-4)])
+def test_scalar_and_vectorised_foot_points_agree_with_a_dense_minimisation_at_high_K1(psi, turn):
+    # K1 = 0.95, dR = -1 um, dRr = +1 um, disc turned by +-1 arcmin (a loaded pin): both forms,
+    # seeded from 2..64 grid points per tooth, give the same foot point, and |s| is the distance a
+    # direct minimisation finds, to 1e-9 mm (measured ~4e-14 mm)
+    cs = hard_case()
+    a = profile_args(cs)
+    R, E, zp = a["R"], a["E"], a["zp"]
+    qx, qy = pin_points(cs, psi, turn)
+    vec = pp.nearest(qx, qy, R, E, zp)
+    assert np.max(np.abs(np.abs(vec.distance_mm) - dense_distance(qx, qy, R, E, zp))) < 1e-9
+    for n in (2, 4, 16, 64):
+        seeds = pp.seed_parameters(qx, qy, R, E, zp, 0.0, n)
+        sc = np.array([pp.foot_point(x, y, R, E, zp, t) for x, y, t in zip(qx, qy, seeds)])
+        assert np.all(sc[:, 5] == 1.0), f"{n} per tooth: Newton did not settle"
+        assert np.max(np.abs(sc[:, 1] - vec.distance_mm)) < 1e-9
+        assert np.max(np.abs(sc[:, 2:4] - vec.normal)) < 1e-9
+        assert np.allclose(sc[:, 4], vec.curvature_per_mm, rtol=1e-9, atol=0)
+        assert np.allclose(sc[:, 4], pp.curvature_per_mm(sc[:, 0], R, E, zp), rtol=1e-9, atol=0)
+        other = pp.nearest(qx, qy, R, E, zp, samples_per_tooth=n)
+        assert np.max(np.abs(other.distance_mm - vec.distance_mm)) < 1e-12
+
+
+@pytest.mark.parametrize("outside_um", [7.0, 20.0])
+def test_a_pin_outside_a_sharp_root_finds_its_flank_not_the_root_point(outside_um):
+    # K1 = 0.95: c's root radius is (R - E zp)^2 / (E zp^2 - R) = 4.3 um; a pin on the root axis
+    # farther out than that sees two flank minima and a maximum at the root itself. Seeded at the
+    # root (t = 0: g = 0 exactly), a plain Newton stays there and reports the root distance
+    # (7 um instead of 6.504 um, 20 um instead of 13.10 um); both forms must find a flank (dense
+    # minimisation, 1e-9 mm)
+    R, E, zp = 64.0, 1.52, 40
+    q = (R - E + outside_um * 1e-3, 0.0)
+    ref = dense_distance([q[0]], [q[1]], R, E, zp)[0]
+    assert ref < outside_um * 1e-3 - 1e-4
+    sc = pp.foot_point(q[0], q[1], R, E, zp, 0.0)
+    assert sc[5] and sc[1] == pytest.approx(ref, abs=1e-9)
+    assert pp.nearest([q[0]], [q[1]], R, E, zp).distance_mm[0] == pytest.approx(ref, abs=1e-9)
+
+
+def test_points_near_c_get_the_same_foot_from_every_seed_grid():
+    # 4000 points within +-2 mm of c at K1 = 0.95: inside the disc (below c's smallest convex
+    # radius, 2.47 mm) each has one nearest point, c(t0) itself, so s is known exactly; outside,
+    # near the sharp roots, two flanks compete. Scalar and vectorised forms, 4 or 64 seeds per
+    # tooth, agree with each other to 1e-9 mm (measured 5e-14) and inside with s
+    R, E, zp = 63.999, 1.52, 40
+    rng = np.random.default_rng(3)
+    t0, s = rng.uniform(0, 2 * np.pi, 4000), rng.uniform(-2.0, 2.0, 4000)
+    cx, cy = pp.theoretical_curve(t0, R, E, zp)
+    dx, dy = pp.theoretical_curve(t0, R, E, zp, derivative=1)
+    sp = np.hypot(dx, dy)
+    qx, qy = cx - dy / sp * s, cy + dx / sp * s
+    ref = pp.nearest(qx, qy, R, E, zp).distance_mm
+    inside = s < 0
+    assert np.allclose(ref[inside], s[inside], atol=1e-9, rtol=0)
+    for n in (4, 64):
+        seeds = pp.seed_parameters(qx, qy, R, E, zp, 0.0, n)
+        sc = np.array([pp.foot_point(x, y, R, E, zp, t) for x, y, t in zip(qx, qy, seeds)])
+        assert np.all(sc[:, 5] == 1.0)
+        assert np.allclose(sc[:, 1], ref, atol=1e-9, rtol=0)
+        assert np.allclose(pp.nearest(qx, qy, R, E, zp, samples_per_tooth=n).distance_mm, ref,
+                           atol=1e-9, rtol=0)
+
+
+def test_the_windowed_seed_search_picks_what_a_full_distance_matrix_picks():
+    # random points anywhere (the disc centre included), a rotated profile, three pin counts
+    rng = np.random.default_rng(7)
+    for zp, E in ((40, 1.3), (40, 1.52), (100, 0.5)):
+        R, rot = 64.0, 0.3
+        q = np.vstack([rng.uniform(-70, 70, (1500, 2)), rng.normal(0, 2, (100, 2)), [[0.0, 0.0]]])
+        n = 16 * (zp - 1)
+        tg = np.linspace(0, 2 * np.pi, n, endpoint=False)
+        xg, yg = pp.theoretical_curve(tg, R, E, zp, rot)
+        full = tg[np.argmin((xg[None] - q[:, :1]) ** 2 + (yg[None] - q[:, 1:]) ** 2, axis=1)]
+        assert np.array_equal(pp.seed_parameters(q[:, 0], q[:, 1], R, E, zp, rot, 16), full)
+
+
+def test_the_seed_search_memory_does_not_grow_with_the_grid():
+    # the CAD deviation check of a 120-pin disc: 47600 points against 7616 seeds is a 2.9 GB
+    # distance matrix; in blocks the search peaks at a few tens of MB (bound 150 MB)
+    import tracemalloc
+    zp = 120
+    R, E = 64.0, 0.8125 * 64.0 / zp
+    t = np.linspace(0, 2 * np.pi, (zp - 1) * 400, endpoint=False)
+    x, y = cycloid_xy(t, R, 0.4, E, zp)
+    tracemalloc.start()
+    try:
+        d = pp.nearest(x, y, R, E, zp).distance_mm + 0.4
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert np.max(np.abs(d)) < 1e-9
+    assert peak < 150e6, f"peak {peak / 1e6:.0f} MB"

@@ -76,3 +76,33 @@ def test_an_impossible_case_fails_with_one_clear_line_and_no_artifacts(tmp_path,
     assert rc == 2
     assert len(err) == 1 and err[0].startswith("error: ") and "undercuts" in err[0]
     assert not (tmp_path / "out").exists()
+
+
+def test_a_rerun_after_a_sigkill_removes_its_temporaries_and_gives_the_same_bytes(out, tmp_path):
+    # SIGKILL cannot be handled: the atomic writes' temporaries (.disc.<random>.step ...) stay, and
+    # the next run of the stage removes them before it writes. Same case, same bytes: the STEP
+    # header carries no clock time (geometry/export.py), the STL, csv and json no run-dependent value.
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    again = tmp_path / "again"
+    env = dict(os.environ, MPLBACKEND="Agg", PYVISTA_OFF_SCREEN="true")
+    argv = [sys.executable, "-m", "pipeline", "geometry", "--case", str(CASES / "rv40e-81.toml"), "--out",
+            str(again), "--quiet"]
+    proc = subprocess.Popen(argv, cwd=CASES.parent, env=env, stderr=subprocess.PIPE)
+    deadline = time.time() + 120
+    while time.time() < deadline and not (again / "profile.csv").exists() and proc.poll() is None:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.communicate(timeout=60)
+    planted = again / ".disc.k1ll3d00.step"     # what a kill inside the STEP export leaves
+    planted.write_text("partial")
+    rerun = subprocess.run(argv, cwd=CASES.parent, env=env, capture_output=True, text=True, timeout=600)
+    assert rerun.returncode == 0, rerun.stderr[-2000:]
+    assert sorted(p.name for p in again.iterdir()) == ARTIFACTS
+    for name in ARTIFACTS:
+        if name != "assembly.png":     # a rendering: pixels may depend on the GL driver's threads
+            assert (again / name).read_bytes() == (out / name).read_bytes(), name
+    assert "FILE_NAME('disc','1970-01-01T00:00:00',('rvte')" in (again / "disc.step").read_text()

@@ -72,7 +72,7 @@ def test_coaxiality_and_softer_reducer_together_give_two_findings():
 def test_both_eccentrics_of_a_crank_misfit_show_at_twice_the_crankshaft_order_even_in_its_size():
     # crank_eccentricity_um (both discs' eccentrics; the crank_hole_position_error signature's shape)
     from pipeline.diagnosis.orders import spectrum_of
-    from pipeline.diagnosis.signatures import crank_pattern_um
+    from pipeline.diagnosis.causes.crank_hole_position_error import crank_pattern_um
     zp, T = CASE.cycloid.zp, 0.03 * CASE.rated_torque_Nm
     ang = np.linspace(0.0, 360.0 * CASE.ratio, PPR + 1)
     base = quasi_static_te(CASE, STIFF, ang, T, 1)

@@ -68,7 +68,7 @@ def test_real_bench_records_name_coaxiality_and_stiffness():
     if not MEASURED.is_dir():
         pytest.skip(f"{MEASURED} absent: the real bench records are not in this checkout")
     from pipeline.diagnosis.diagnose import diagnose
-    from pipeline.records import read_record
+    from dynamics.records import read_record
     case = load_case(ROOT / "cases" / "rv160n-81.toml")
     recs = [read_record(p) for p in sorted(MEASURED.glob("rv160n_*.csv"))]
     assert len(recs) == 8                      # README: 4 torques x forward/backward

@@ -14,7 +14,7 @@ import pytest
 
 from fem.stiffness import PinContact, StiffnessModel, TurningArm
 from geometry.params import load_case
-from pipeline.diagnosis.bench import CAUSES, bench_records, draw_effect
+from pipeline.diagnosis.bench import bench_records, draw_effect, drawable_causes
 from pipeline.diagnosis.diagnose import diagnose, holdout_split
 from pipeline.diagnosis.significance import test_lines as line_test
 from pipeline.diagnosis.zeros import group_records
@@ -40,7 +40,7 @@ def toy_te(case, stiffness, ang, torque, direction):
     er, zp, n = case.errors, case.cycloid.zp, case.carrier.crank_count
     te = te + er.output_coaxiality_um / (case.carrier.output_flange_radius_mm * 1e3) * 206265.0 \
         * np.sin(th + np.radians(er.output_coaxiality_phase_deg))
-    # crank misfits as the two-disc model answers them (signatures.py): the zp x disc rotations
+    # crank misfits as the two-disc model answers them (causes/): the zp x disc rotations
     # of the two discs cancel, the rectified part |d| remains, toward less lost motion
     x = 2 * np.pi * np.arange(n) / n
     de = np.broadcast_to(np.asarray(er.crank_eccentricity_um, float), (n,))
@@ -58,7 +58,7 @@ STIFF = toy_stiffness(CASE)
 
 @pytest.mark.parametrize("seed", range(12))
 def test_a_hidden_effect_is_named_and_fitted_blind(seed):
-    cause = CAUSES[seed % 4]
+    cause = drawable_causes()[seed % 4]
     eff = draw_effect(np.random.default_rng(seed), CASE, cause)
     d = diagnose(CASE, STIFF, bench_records(toy_te, CASE, STIFF, [eff], seed=seed), toy_te, points_per_rev=256)
     if cause == "crank_eccentricity_error":

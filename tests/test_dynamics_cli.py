@@ -69,3 +69,64 @@ def test_matrix_writes_the_sigma_table_with_twelve_cells(tmp_path, stiffness_fil
     for name in ("te_std_last_rev.csv", "te_std_whole.csv"):      # the other two sigma windows
         assert list(csv.reader((tmp_path / name).open()))[0] == rows[0]
     assert len(list(tmp_path.glob("*.npz"))) == 12
+    # matrix.json is te_std.csv's sidecar: what the table was made from
+    made = json.loads((tmp_path / "matrix.json").read_text())["made_from"]
+    assert made["artifact"] == "rv-matrix/1" and set(made["inputs"]) == {"stiffness"}
+
+
+def test_simulate_defaults_to_the_case_input_speed(tmp_path):
+    # DESIGN.md: speed defaults to the case's [operation] input_speed_rpm (rv40e-105: 525 rpm, paper
+    # 000), not paper 001's 1200. The drive is speed * STEP(t, 0, 0, 1, 1) (paper 001), so the input
+    # angle at t is speed * (t^3 - t^4 / 2) for t <= 1 s: 0.02295 speed at 0.3 s.
+    case = load_case(case_path("rv40e-105"))
+    assert case.operation.input_speed_rpm == 525.0
+    stiff = tmp_path / "stiffness.json"
+    save(stiffness_for_tests(case), stiff)
+    for speed_args, rpm in (([], 525.0), (["--speed-rpm", "1800"], 1800.0)):
+        out = tmp_path / f"rec{rpm:g}.csv"
+        assert main(["simulate", "--case", str(case_path("rv40e-105")), "--stiffness", str(stiff), "--load",
+                     "constant:100", "--duration", "0.3", *speed_args, "--out", str(out), "--quiet"]) == 0
+        text = out.read_text()
+        assert f"speed {rpm:g} rpm" in text
+        data = np.loadtxt([r for r in text.splitlines() if not r.startswith("#")][1:], delimiter=",")
+        t = data[-1, 0]
+        assert data[-1, 1] == pytest.approx(rpm * 6.0 * (t ** 3 - t ** 4 / 2), rel=1e-3)
+
+
+def test_outputs_record_the_case_and_stiffness_they_were_made_from(tmp_path, stiffness_file):
+    from geometry.fingerprint import case_fingerprint
+    rc = main(["hysteresis", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--out",
+               str(tmp_path), "--quiet"])
+    assert rc == 0
+    made = json.loads((tmp_path / "hysteresis.json").read_text())["made_from"]
+    stiff = json.loads(stiffness_file.read_text())["made_from"]
+    assert made["case_fingerprint"] == case_fingerprint(load_case(case_path())) == stiff["case_fingerprint"]
+    assert made["inputs"] == {"stiffness": stiff["fingerprint"]} and made["artifact"] == "rv-hysteresis/1"
+    rc = main(["simulate", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--load", "constant:100",
+               "--duration", "0.01", "--out", str(tmp_path / "r.csv"), "--quiet"])
+    assert rc == 0 and f"# made_from: case {made['case_fingerprint']}, stiffness {stiff['fingerprint']}" \
+        in (tmp_path / "r.csv").read_text()
+
+
+def test_the_matrix_reuses_finished_cells_with_the_same_inputs_and_recomputes_the_rest(tmp_path, stiffness_file,
+                                                                                     capsys):
+    # each cell is its own artifact carrying the fingerprint of its inputs (dynamics/matrix.py):
+    # a rerun recomputes only the cells that are missing or were made from other inputs
+    argv = ["matrix", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--out", str(tmp_path),
+            "--duration", "0.1", "--dt", "2e-4"]
+    assert main(argv + ["--quiet"]) == 0
+    table = (tmp_path / "te_std_whole.csv").read_bytes()
+
+    def stamps():
+        return {p.name: (p.stat().st_ino, p.stat().st_mtime_ns) for p in tmp_path.glob("*.npz")}
+    first = stamps()
+    (tmp_path / "sine_300.npz").unlink()
+    (tmp_path / "constant_100.npz").write_bytes(b"a damaged file")
+    capsys.readouterr()
+    assert main(argv) == 0
+    assert "2 cells computed, 10 reused" in capsys.readouterr().out
+    second = stamps()
+    assert {k for k in first if first[k] != second[k]} == {"sine_300.npz", "constant_100.npz"}
+    assert (tmp_path / "te_std_whole.csv").read_bytes() == table      # reused or computed: same numbers
+    assert main(argv[:-1] + ["1e-4"]) == 0                              # another time step: all new
+    assert "12 cells computed, 0 reused" in capsys.readouterr().out

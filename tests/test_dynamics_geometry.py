@@ -1,13 +1,18 @@
-"""Pin gaps from the actual profile: the foot-point Newton against brute force at the hard end
-(K1 = E zp / R = 0.95, micron clearances), and conjugacy of the unmodified profile."""
+"""Pin gaps from the actual profile: the compiled foot point of the dynamics kernels
+(`geometry.pin_profile.foot_point` compiled by `dynamics.couplings.base`) against brute force and
+against the geometry reference (`geometry.clearance` gaps) at the hard end (K1 = E zp / R = 0.95,
+micron clearances), and conjugacy of the unmodified profile."""
 import math
 
 import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from dynamics.kernels import foot_point
+from dynamics.couplings.base import foot_point
+from dynamics.model import build_model, evaluate
+from geometry import clearance as cl
 from geometry.profile import cycloid_xy
+from support import case_path, stiffness_for_tests
 
 
 def _brute_gap(px, py, R, Rr, E, zp, rpin):
@@ -32,6 +37,14 @@ def _min_convex_radius(R, E, zp):
     return 1.0 / kappa[kappa > 0].max()
 
 
+def _hard_case(dR_mm=-0.001, dRr_mm=0.001):
+    """RV-40E with K1 = 0.95 (E = 1.52 mm) and micron modifications; pin radius 2 mm because the
+    tips' convex radius is only 2.47 mm at this K1 (no undercut)."""
+    from geometry.params import load_case
+    return load_case(case_path("rv40e-105")).replace("cycloid", eccentricity_mm=1.52, pin_radius_mm=2.0) \
+        .replace("modification", offset_mm=dR_mm, equidistant_mm=dRr_mm)
+
+
 @pytest.mark.parametrize("K1", [0.5, 0.81, 0.95])
 def test_gap_matches_brute_force_to_a_nanometre_at_micron_clearances(K1):
     zp, R = 40, 64e-3
@@ -48,12 +61,34 @@ def test_gap_matches_brute_force_to_a_nanometre_at_micron_clearances(K1):
         ca, sa = math.cos(alpha), math.sin(alpha)
         w = P - c
         pb = np.array([ca * w[0] + sa * w[1], -sa * w[0] + ca * w[1]])
-        t, s, nx, ny, ok = foot_point(pb[0], pb[1], R + dR, E, float(zp), alpha - 2 * np.pi * k / zp)
+        t, s, nx, ny, _, ok = foot_point(pb[0], pb[1], R + dR, E, float(zp), alpha - 2 * np.pi * k / zp)
         assert ok
         gap = s + (Rr + dRr) - Rr
         brute = _brute_gap(pb[0], pb[1], R + dR, Rr + dRr, E, zp, Rr)
         assert gap == pytest.approx(brute, abs=1e-9), (K1, psi, k)
         assert 0 < gap < 10e-6     # a clearance of microns, no phantom interference
+
+
+@pytest.mark.parametrize("dR_mm, dRr_mm", [(-0.001, 0.001), (-0.003, 0.0), (0.0, 0.002)])
+def test_the_dynamics_pin_gaps_are_the_geometry_reference_gaps_at_k1_095_and_micron_clearances(dR_mm, dRr_mm):
+    # the whole dynamics path (pose -> disc frame -> compiled foot point -> gap, in metres) against
+    # geometry.clearance (vectorised bracketed Newton, mm) in the conjugate pose: both solve the
+    # same equation to machine precision, so 1e-12 m (1e-9 mm) on gaps of 1-4 um
+    cs = _hard_case(dR_mm, dRr_mm)
+    assert cs.cycloid.eccentricity_mm * cs.cycloid.zp / cs.cycloid.pin_circle_radius_mm == pytest.approx(0.95)
+    model = build_model(cs, stiffness_for_tests(cs))
+    disc, zc, E = model.layout["disc"], cs.cycloid.zc, cs.cycloid.eccentricity_mm * 1e-3
+    for psi in np.linspace(0.0, 2 * np.pi, 7, endpoint=False) + 0.1:
+        q = np.zeros(model.n_dof)
+        for d in range(model.n_disc):
+            q[disc.index(d, "x")], q[disc.index(d, "y")] = E * math.cos(psi + math.pi * d), E * math.sin(psi + math.pi * d)
+            q[disc.index(d, "rot")] = -psi / zc
+        w, _ = evaluate(model, q, 0.0)
+        gaps = model.contacts(w.gap)
+        for d in range(model.n_disc):
+            ref_mm = cl.pin_contacts(cs, psi + math.pi * d).gap_mm
+            assert np.abs(gaps[d] - 1e-3 * ref_mm).max() < 1e-12, (psi, d)
+            assert 0.0 < gaps[d].min() < 5e-6          # micron clearance, no phantom interference
 
 
 def test_unmodified_profile_touches_every_pin_at_every_crank_angle():
@@ -66,7 +101,7 @@ def test_unmodified_profile_touches_every_pin_at_every_crank_angle():
             th = 2 * np.pi * k / zp
             w = R * np.array([math.cos(th), math.sin(th)]) - c
             pb = (math.cos(alpha) * w[0] + math.sin(alpha) * w[1], -math.sin(alpha) * w[0] + math.cos(alpha) * w[1])
-            _, s, _, _, ok = foot_point(pb[0], pb[1], R, E, float(zp), alpha - th)
+            _, s, _, _, _, ok = foot_point(pb[0], pb[1], R, E, float(zp), alpha - th)
             assert ok and abs(s) < 1e-12
 
 
@@ -74,6 +109,6 @@ def test_profile_is_the_inward_offset_of_the_pin_centre_curve_along_the_kernel_n
     zp, R, Rr, E = 40, 64e-3, 3e-3, 1.3e-3
     for t in np.linspace(0.1, 6.2, 9):
         cx, cy = R * math.cos(t) - E * math.cos(zp * t), -R * math.sin(t) + E * math.sin(zp * t)
-        _, s, nx, ny, _ = foot_point(cx, cy, R, E, float(zp), t)
+        _, s, nx, ny, _, _ = foot_point(cx, cy, R, E, float(zp), t)
         x, y = cycloid_xy(t, R, Rr, E, zp)
         assert abs(s) < 1e-15 and math.hypot(cx - Rr * nx - x, cy - Rr * ny - y) < 1e-12

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from dynamics import kernels as kn
 from dynamics import model as dm
+from dynamics.couplings.base import foot_point
 from dynamics.loads import LoadSpec
 from dynamics.model import (DynamicsError, build_model, linearise, nominal_q, quasi_static, simulate,
                             solve_static)
@@ -46,15 +46,9 @@ def test_conjugate_profile_without_modification_has_zero_kinematic_error():
 def test_tangent_matches_finite_differences_of_the_forces(model):
     s = solve_static(model, 10.0, 300.0)
     K, _ = linearise(model, s)
-    w = dm._workspace(model)
-    geo = model.geo.copy()
-    geo[kn.G_BETA] = 0.0
 
     def f(q):
-        kn.assemble(q, np.zeros_like(q), math.radians(10.0), 0.0, geo, model.pins, model.cranks, model.law,
-                    model.disc_rotation, dm._fresh_tws(model), False, w["f"], w["K"], w["C"], w["pf"],
-                    w["pg"], w["br"], w["mf"])
-        return w["f"].copy()
+        return dm.evaluate(model, q, math.radians(10.0))[0].f.copy()
 
     # central differences must not straddle a pin's contact onset (the law's kink at zero approach):
     # step 1e-9 m, or a fifth of the smallest |gap| (a pin at 4 nm approach at 10 deg on rv40e-81)
@@ -80,15 +74,16 @@ def test_static_equilibrium_balances_power_and_load_sharing(model):
     assert abs(tot[0] - tot[1]) < 0.05 * tot.mean()
     assert s.load_share.sum(axis=1) == pytest.approx([1.0, 1.0])
     # output torque balance: the pin housing reacts T (1 - 1/i) (moment of the pin forces)
-    th = model.pins[:, 3]
+    p = model.params("pin")
+    th = p.pins[:, 3]
     moment = 0.0
     for d in range(model.n_disc):
         i = model.disc_index(d)
-        c, al = s.q[i:i + 2], s.q[i + 2] + model.disc_rotation[d]
+        c, al = s.q[i:i + 2], s.q[i + 2] + p.disc_rotation_rad[d]
         for k in np.flatnonzero(s.pin_force_N[d] > 0):
-            P = model.pins[k, :2]
+            P = p.pins[k, :2]
             pb = np.array([[math.cos(al), math.sin(al)], [-math.sin(al), math.cos(al)]]) @ (P - c)
-            t, _, nx, ny, _ = kn.foot_point(pb[0], pb[1], model.geo[kn.G_R], model.geo[kn.G_E], 40.0, al - th[k])
+            t, _, nx, ny, _, _ = foot_point(pb[0], pb[1], p.R_m, p.E_m, p.zp, al - th[k])
             ng = np.array([math.cos(al) * nx - math.sin(al) * ny, math.sin(al) * nx + math.cos(al) * ny])
             F_on_pin = s.pin_force_N[d, k] * ng
             moment += P[0] * F_on_pin[1] - P[1] * F_on_pin[0]
@@ -120,16 +115,11 @@ def test_eigenfrequency_of_free_vibration_matches_the_eigenvalue_solve(model):
     # free vibration of the nonlinear model in mode 1 (input held, undamped, trapezoidal rule)
     n, dt = 4000, 2e-5
     z = np.zeros(n + 1)
-    q, v = s.q.copy(), 1e-3 * modes[:, 0] / np.abs(modes[0, 0])
-    geo = model.geo.copy()
-    geo[kn.G_BETA] = 0.0
-    out = [np.zeros(n + 1), np.zeros((n + 1, 2), np.int64), np.zeros((1, 2, 40)), np.zeros(n + 1),
-           np.zeros((n + 1, 4))]
-    done, _, status, missed = kn.integrate(q, v, model.mass, z, z, np.full(n + 1, 412.0), dt, 1, 0.0, geo, model.pins,
-                                   model.cranks, model.law, model.disc_rotation, dm._fresh_tws(model), model.scale,
-                                   25, 1e-12, *out, False, np.zeros((3, model.n_dof)))
-    assert status == 0 and missed == 0
-    x = out[0] - out[0].mean()
+    v = 1e-3 * modes[:, 0] / np.abs(modes[model.i_out, 0])
+    run = dm.run_dynamics(model, s.q, v, z, z, np.full(n + 1, 412.0), dt, 1, 0.0, 0.0, store_forces=False,
+                          max_iter=25, tol_m=1e-12)
+    assert run.status == 0 and run.missed == 0
+    x = run.samples.q_out - run.samples.q_out.mean()
     spec = np.abs(np.fft.rfft(x * np.hanning(len(x)), 64 * len(x)))
     f_peak = np.fft.rfftfreq(64 * len(x), dt)[np.argmax(spec)]
     # trapezoidal period elongation (w dt)^2 / 12 < 1e-4 here; amplitude 1e-3 rad/s keeps it linear

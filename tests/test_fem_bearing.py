@@ -43,13 +43,15 @@ def test_bearing_deflection_is_the_needle_hertz_sum_plus_a_little_ring_ovalisati
         assert 0 < d / ref - 1 < 0.12
 
 
-def test_bearing_deflection_against_palmgren_is_about_twice_as_the_races_are_included(fe):
-    # Palmgren (Harris & Kotzalas eq. 7.5) is the roller + its two contacts on thick races; the FE
-    # also carries the eccentric ring down to r_e/2 and the bore ring out to 2a: measured
-    # FE / Palmgren = 1.9 (low load) .. 2.1 (max); band 1.5..2.5. Exponent: Palmgren 1/0.9 = 1.11,
+def test_bearing_deflection_matches_palmgren_for_the_needles_two_contacts(fe):
+    # Palmgren (fem.hertz: 3.84e-5 Q^0.9 / l^0.8 mm per roller-raceway contact, two in series per
+    # needle) is empirical on thick steel races, so it carries the local race deformation the FE
+    # has (eccentric ring down to r_e/2, bore ring out to 2a): measured FE / Palmgren = 0.96 (low
+    # load) .. 1.03 (max); band 0.85..1.15. (With the one-contact figure for the whole needle, as
+    # before the issue-11 audit, this ratio was 1.9..2.1.) Exponent: Palmgren 1/0.9 = 1.11,
     # FE 1.05..1.1 (2D line contact: F ~ d / ln(1/d)); band 1.0..1.15
     ratio = fe.deflection_m / fe.palmgren_deflection_m
-    assert np.all((ratio > 1.5) & (ratio < 2.5))
+    assert np.all((ratio > 0.85) & (ratio < 1.15))
     assert 1.0 < fe.law_n < 1.15
 
 

@@ -1,12 +1,18 @@
-"""FEM stage: Hertz benchmark, convergence, patch test, contact solver (coarse, fast meshes)."""
+"""FEM stage: Hertz benchmark, convergence, patch test, contact solver (coarse, fast meshes), and the
+first contact of a pin on the modified profile (exact, from the one geometry kernel)."""
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.optimize import minimize_scalar
 
 from fem import contact, elastic, hertz
 from fem.mesh import block_mesh
-from fem.pin_contact import hertz_benchmark
+from fem.pin_contact import first_contact, hertz_benchmark, pin_pose
+from geometry.artifacts import InputError
+from geometry.params import load_case
+from geometry.profile import cycloid_xy, profile_args
 
 
 def test_cylinder_on_flat_matches_hertz_peak_pressure_and_half_width_within_3_percent():
@@ -80,3 +86,102 @@ def test_power_law_fit_recovers_an_exact_law():
 def test_a_benchmark_load_too_large_for_hertz_is_refused_with_the_value():
     with pytest.raises(ValueError, match="half-width"):
         hertz_benchmark(1e-3, 1e-3, 1e6)
+
+
+# ----------------------------------------------------------------------------- first contact
+CASES = Path(__file__).resolve().parents[1] / "cases"
+
+
+def grid_first_contact(case, centres_mm, t_range, n=40001):
+    """The former fem first contact, kept as a reference: nearest of 40001 profile points, a
+    2001-point local refinement, curvature by central differences (dt = 1e-5 rad). Accurate
+    where the profile is neither flat nor sharp: t ~1e-8 rad, curvature ~1e-5 relative."""
+    args = profile_args(case, modified=True)
+    t = np.linspace(*t_range, n)
+    xy = np.column_stack(cycloid_xy(t, **args))
+    out = []
+    for c in centres_mm:
+        i = int(np.argmin(np.hypot(*(xy - c).T)))
+        tt = np.linspace(t[max(i - 2, 0)], t[min(i + 2, n - 1)], 2001)
+        pts = np.column_stack(cycloid_xy(tt, **args))
+        j = int(np.argmin(np.hypot(*(pts - c).T)))
+        tc, p = tt[j], pts[j]
+        nrm = (c - p) / np.hypot(*(c - p))
+        dt = 1e-5
+        p_m, p_p = (np.array(cycloid_xy(np.array([tc + s]), **args)).ravel() for s in (-dt, dt))
+        d1, d2 = (p_p - p_m) / (2 * dt), (p_p - 2 * p + p_m) / dt ** 2
+        rho = np.hypot(*d1) ** 3 / (d1[0] * d2[1] - d1[1] * d2[0])
+        convex = np.dot(np.array([-d1[1], d1[0]]) / np.hypot(*d1) * rho, nrm) < 0
+        out.append((tc, p, nrm, p + nrm * case.cycloid.pin_radius_mm, abs(rho) if convex else -abs(rho)))
+    return out
+
+
+def _case(name="rv40e-105"):
+    return load_case(CASES / f"{name}.toml")
+
+
+def _t_range(case):
+    pitch = 2 * np.pi / case.cycloid.zp
+    return (-1.5 * pitch, 1.5 * pitch)
+
+
+@pytest.mark.parametrize("name", ["rv40e-105", "rv160n-81"])
+def test_first_contact_agrees_with_the_former_grid_search_where_that_was_accurate(name):
+    # 40 pin phases along the path of contact: measured differences t 1.2e-8 rad, point 3.6e-6 mm,
+    # normal 1.2e-6, touching centre 8e-9 mm, curvature radius 2.6e-5 relative (the grid's own
+    # resolution and finite-difference error); bounds 1e-7 rad, 1e-5 mm, 1e-5, 1e-7 mm, 1e-4
+    case = _case(name)
+    pos = np.linspace(5, 175, 40)
+    centres = pin_pose(case, pos)
+    new = first_contact(case, centres, _t_range(case))
+    old = grid_first_contact(case, centres, _t_range(case))
+    assert np.max(np.abs(new.t_rad - [o[0] for o in old])) < 1e-7
+    assert np.max(np.abs(new.point_mm - [o[1] for o in old])) < 1e-5
+    assert np.max(np.abs(new.normal - [o[2] for o in old])) < 1e-5
+    assert np.max(np.abs(new.centre_mm - [o[3] for o in old])) < 1e-7
+    assert np.allclose(new.curvature_radius_mm, [o[4] for o in old], rtol=1e-4, atol=0)
+
+
+def _hard_case():
+    # K1 = 0.95, micron modifications, pin radius 2 mm (tests/test_clearance.py's hard end)
+    return _case().replace("cycloid", eccentricity_mm=1.52, pin_radius_mm=2.0) \
+        .replace("modification", offset_mm=-0.001, equidistant_mm=0.001)
+
+
+@pytest.mark.parametrize("make", [_case, _hard_case])
+def test_the_moved_pin_touches_the_modified_profile_exactly(make):
+    # the pin centre moved along the normal lies one pin radius from the profile: direct bounded
+    # minimisation of |cycloid_xy(t) - centre| around 200000 samples, to 1e-9 mm
+    case = make()
+    args = profile_args(case, modified=True)
+    fc = first_contact(case, pin_pose(case, np.linspace(2, 178, 12)), _t_range(case))
+    tg = np.linspace(*_t_range(case), 200000)
+    xg, yg = cycloid_xy(tg, **args)
+    for c, n, p in zip(fc.centre_mm, fc.normal, fc.point_mm):
+        i = np.argmin((xg - c[0]) ** 2 + (yg - c[1]) ** 2)
+        f = lambda u: math.hypot(*(np.array(cycloid_xy(tg[i] + u, **args)).ravel() - c))  # noqa: E731
+        d = minimize_scalar(f, bounds=(-2e-5, 2e-5), method="bounded", options={"xatol": 1e-15}).fun
+        assert d == pytest.approx(case.cycloid.pin_radius_mm, abs=1e-9)
+        assert np.allclose((c - p) / np.hypot(*(c - p)), n, atol=1e-12)
+
+
+@pytest.mark.parametrize("make", [_case, _hard_case])
+def test_the_curvature_radius_at_root_and_tip_is_the_closed_form_minus_the_pin_radius(make):
+    # pin phase 0 touches the root, 180 deg the tip. Pin-centre curve (R, Rr modified, K1 = E zp / R):
+    # root -(R - E zp)^2 / (E zp^2 - R) (concave), tip R (1 + K1)^2 / (1 + zp K1) (convex); the
+    # profile is offset inward by Rr: rho - Rr, to 1e-9 relative
+    case = make()
+    a = profile_args(case, modified=True)
+    R, E, zp, Rr = a["R"], a["E"], a["zp"], a["Rr"]
+    k1 = E * zp / R
+    fc = first_contact(case, pin_pose(case, [0.0, 180.0]), _t_range(case))
+    root = -(R - E * zp) ** 2 / (E * zp ** 2 - R) - Rr
+    tip = R * (1 + k1) ** 2 / (1 + zp * k1) - Rr
+    assert fc.curvature_radius_mm == pytest.approx([root, tip], rel=1e-9)
+    assert abs(fc.t_rad[0]) < 1e-9 and abs(abs(fc.t_rad[1]) - np.pi / case.cycloid.zc) < 1e-9
+
+
+def test_a_foot_point_outside_the_meshed_stretch_is_refused():
+    case = _case()
+    with pytest.raises(InputError, match="outside the profile stretch"):
+        first_contact(case, pin_pose(case, [90.0]), (0.05, 0.1))

@@ -1,6 +1,7 @@
 """Case files: the shipped cases load; every invalid input names key, value and allowed range."""
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from geometry.params import CaseError, case_from_dict, load_case
@@ -75,3 +76,120 @@ def test_error_tuples_take_one_value_or_one_per_crank():
 def test_missing_file_is_a_case_error(tmp_path):
     with pytest.raises(CaseError, match="not found"):
         load_case(tmp_path / "nope.toml")
+
+
+# ----------------------------------------------------------------------------- validation limits
+def one_line_case_error(fn, *args):
+    with pytest.raises(CaseError) as exc:
+        fn(*args)
+    msg = str(exc.value)
+    assert "\n" not in msg, msg
+    return msg
+
+
+@pytest.mark.parametrize("nu, ok", [(0.0, True), (0.3, True), (0.4999, True), (0.5, False), (-0.1, False)])
+def test_poisson_ratio_must_lie_in_zero_to_one_half_open(nu, ok):
+    # 0.5 is incompressible: plane-strain FE divides by 1 - 2 nu; the range is [0, 0.5)
+    data = raw()
+    data["material"]["poisson_ratio"] = nu
+    if ok:
+        assert case_from_dict(data).material.poisson_ratio == nu
+    else:
+        msg = one_line_case_error(case_from_dict, data, "x.toml")
+        assert "x.toml: [material] poisson_ratio" in msg and f"= {nu}" in msg and "[0.0, 0.5)" in msg
+
+
+def test_a_pin_count_above_any_real_cycloid_reducer_is_refused_before_any_geometry():
+    # zp = 400 (a valid profile otherwise: E zp < R, pins fit, no undercut) asked the geometry
+    # stage for 30 GiB; the limit is ZP_MAX = 120 (Sumitomo Cyclo 119:1), with the reason
+    from geometry.params import ZP_MAX
+    data = raw()
+    data["cycloid"] |= dict(zp=400, zc=399, eccentricity_mm=0.13, pin_radius_mm=0.3)
+    msg = one_line_case_error(case_from_dict, data, "x.toml")
+    assert "[cycloid] zp = 400" in msg and f"[3, {ZP_MAX}]" in msg and "Cyclo" in msg
+
+
+def test_the_largest_pin_count_allowed_loads_and_its_gaps_are_cheap():
+    # zp = 120, K1 = 0.8125, pin radius 0.4 mm (below the 1.59 mm tip radius of curvature)
+    import time
+
+    from geometry import clearance
+    data = raw()
+    data["cycloid"] |= dict(zp=120, zc=119, eccentricity_mm=0.4333, pin_radius_mm=0.4)
+    case = case_from_dict(data)
+    t0 = time.perf_counter()
+    gaps = clearance.pin_distances_mm(case, 0.1)
+    assert gaps.shape == (120,) and np.all(gaps > 0)
+    assert time.perf_counter() - t0 < 5.0
+
+
+@pytest.mark.parametrize("name", ["../evil", "a/b", "a\\b", ".", "..", "has space", "tab\t", "", "x" * 101,
+                                  "caf\u00e9"])
+def test_the_case_name_must_be_a_plain_file_name_token(name):
+    # the name becomes build/<name>/: no path separators, no '.'/'..', [A-Za-z0-9._-]{1,100}
+    data = raw()
+    data["name"] = name
+    msg = one_line_case_error(case_from_dict, data, "x.toml")
+    assert "name" in msg
+    if name:
+        assert repr(name) in msg and "file-name token" in msg
+
+
+@pytest.mark.parametrize("name", ["rv40e-105", "RV_40E.v2", "a"])
+def test_plain_names_are_accepted(name):
+    data = raw()
+    data["name"] = name
+    assert case_from_dict(data).name == name
+
+
+def test_a_non_utf8_case_file_is_a_one_line_case_error(tmp_path):
+    p = tmp_path / "latin1.toml"
+    p.write_bytes((CASES / "rv40e-105.toml").read_bytes().replace(b"# RV-40E", "# RV-40E \u00e9".encode("latin-1")))
+    msg = one_line_case_error(load_case, p)
+    assert str(p) in msg and "not a UTF-8 text file" in msg
+
+
+def test_a_binary_file_given_as_a_case_is_a_one_line_case_error(tmp_path):
+    p = tmp_path / "blob.toml"
+    p.write_bytes(bytes(range(256)) * 4)
+    msg = one_line_case_error(load_case, p)
+    assert str(p) in msg
+
+
+def test_a_binary_utf8_file_with_nul_bytes_is_not_valid_toml(tmp_path):
+    p = tmp_path / "nul.toml"
+    p.write_bytes(b'name = "a"\x00\x00\n[cycloid\n')
+    msg = one_line_case_error(load_case, p)
+    assert str(p) in msg and "not valid TOML" in msg
+
+
+def test_a_directory_given_as_a_case_is_a_one_line_case_error(tmp_path):
+    msg = one_line_case_error(load_case, tmp_path)
+    assert str(tmp_path) in msg and "is a directory" in msg
+
+
+def test_an_unreadable_case_file_is_a_one_line_case_error(tmp_path, monkeypatch):
+    # root reads anything, so the permission error is raised where the file is read
+    p = tmp_path / "locked.toml"
+    p.write_text((CASES / "rv40e-105.toml").read_text())
+
+    def denied(self):
+        raise PermissionError(13, "Permission denied", str(self))
+    monkeypatch.setattr(Path, "read_bytes", denied)
+    msg = one_line_case_error(load_case, p)
+    assert str(p) in msg and "permission denied" in msg
+
+
+def test_a_device_or_huge_file_is_refused_before_reading(tmp_path):
+    from geometry.params import CASE_FILE_MAX_BYTES
+    if Path("/dev/zero").exists():
+        assert "not a regular file" in one_line_case_error(load_case, "/dev/zero")
+    p = tmp_path / "huge.toml"
+    p.write_bytes(b"#" * (CASE_FILE_MAX_BYTES + 1))
+    assert f"at most {CASE_FILE_MAX_BYTES} bytes" in one_line_case_error(load_case, p)
+
+
+def test_a_case_file_with_a_utf8_byte_order_mark_loads(tmp_path):
+    p = tmp_path / "bom.toml"
+    p.write_bytes(b"\xef\xbb\xbf" + (CASES / "rv40e-105.toml").read_bytes())
+    assert load_case(p).name == "rv40e-105"

@@ -4,7 +4,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pipeline.records import RecordError, parse_column_map, read_record, write_record
+from dynamics.records import RecordError, parse_column_map, read_record, write_record
 
 MEASURED = Path(__file__).parents[2] / "shared" / "measured"
 
@@ -96,3 +96,57 @@ def test_the_real_bench_records_load():
     assert r.direction == -1 and r.torque_Nm == -300.0
     assert r.input_speed_rpm == pytest.approx(1800.0, rel=2e-3)
     assert len(r.time_s) == 10800 and r.comments[0].startswith("Real bench record")
+
+
+# ------------------------------------------------------------------ paths that are no text record
+ALLOWED = "a record is a UTF-8 text CSV with the header time_s,input_angle_deg,output_angle_deg,output_torque_Nm"
+
+
+def _one_line_naming(exc, path, what):
+    msg = str(exc.value)
+    assert "\n" not in msg and str(path) in msg and what in msg and ALLOWED in msg, msg
+
+
+def test_a_folder_given_as_a_record_is_refused_in_one_line(tmp_path):
+    with pytest.raises(RecordError) as e:
+        read_record(tmp_path)
+    _one_line_naming(e, tmp_path, "is a folder")
+
+
+def test_an_unreadable_record_is_refused_in_one_line(tmp_path, monkeypatch):
+    p = _record(tmp_path)
+    # chmod 000 does not stop root (the CI container): make the read itself fail as it would
+    real = Path.read_bytes
+    monkeypatch.setattr(Path, "read_bytes", lambda self: (_ for _ in ()).throw(
+        PermissionError(13, "Permission denied")) if self == p else real(self))
+    with pytest.raises(RecordError) as e:
+        read_record(p)
+    _one_line_naming(e, p, "permission denied")
+
+
+def test_a_binary_file_is_refused_even_when_it_decodes_as_utf8(tmp_path):
+    p = tmp_path / "zeros.csv"
+    p.write_bytes(b"time_s,input_angle_deg\n" + b"\0" * 64)     # NUL bytes are valid UTF-8
+    with pytest.raises(RecordError) as e:
+        read_record(p)
+    _one_line_naming(e, p, "binary content (NUL byte at offset 23)")
+    q = tmp_path / "picture.csv"
+    q.write_bytes(bytes(range(256)))
+    with pytest.raises(RecordError) as e:
+        read_record(q)
+    _one_line_naming(e, q, "binary content")
+
+
+def test_a_latin1_record_is_refused_naming_the_byte_and_the_fix(tmp_path):
+    p = _record(tmp_path, comments=("oil at 25 °C",))
+    p.write_bytes(p.read_text().encode("latin-1"))
+    with pytest.raises(RecordError) as e:
+        read_record(p)
+    _one_line_naming(e, p, "not UTF-8 text (byte 0xb0 at offset")
+    assert "re-save it as UTF-8" in str(e.value)
+
+
+def test_a_spreadsheet_byte_order_mark_is_not_part_of_the_header(tmp_path):
+    p = _record(tmp_path, comments=())
+    p.write_bytes(b"\xef\xbb\xbf" + p.read_bytes())
+    assert read_record(p).time_s[-1] == pytest.approx(2.0)

@@ -4,7 +4,7 @@ import pytest
 from fem.stiffness import save
 from geometry.params import load_case
 from pipeline.cli import main
-from pipeline.sweep import chunks, run_tasks
+from pipeline.sweep import SchedulerError, check_scheduler, chunks, run_tasks
 from tests.support import case_path, stiffness_for_tests
 
 
@@ -52,3 +52,56 @@ def test_an_fe_sub_problem_on_a_loopback_dask_cluster_equals_the_local_run():
     for key in ("load_N", "deflection_m", "law_k_N_per_m_pow", "law_n", "fe_qmax_N"):
         # to round-off: a worker's BLAS may sum in another order (measured ~1e-15)
         assert local[key] == pytest.approx(remote[key], rel=1e-12, abs=0), key
+
+
+def _nap(seconds):
+    import time
+    time.sleep(seconds)
+    return seconds
+
+
+def _interrupt_at_first(i, n):
+    raise KeyboardInterrupt   # what the CLI's signal handling delivers mid-sweep (Ctrl-C)
+
+
+def test_an_interrupt_stops_the_local_pool_at_once_instead_of_running_every_task():
+    import multiprocessing
+    import time
+    others = set(multiprocessing.active_children())   # what earlier tests may have left
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        run_tasks(_nap, [(1.0,)] * 8, workers=2, progress=_interrupt_at_first)
+    assert time.perf_counter() - t0 < 3.0          # 8 x 1 s on 2 workers would be 4 s
+    assert set(multiprocessing.active_children()) <= others   # no worker left running the rest
+
+
+def _scheduler_tasks(dask_scheduler):
+    return len(dask_scheduler.tasks)
+
+
+def test_an_interrupt_cancels_the_pending_dask_tasks():
+    distributed = pytest.importorskip("distributed")
+    import time
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp://",
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        t0 = time.perf_counter()
+        with pytest.raises(KeyboardInterrupt):
+            run_tasks(_nap, [(0.5,)] * 10, scheduler=cluster.scheduler_address, progress=_interrupt_at_first)
+        assert time.perf_counter() - t0 < 3.0      # 10 x 0.5 s on one thread would be 5 s
+        with distributed.Client(cluster.scheduler_address) as client:
+            deadline = time.time() + 10            # the scheduler forgets the cancelled tasks
+            while time.time() < deadline and client.run_on_scheduler(_scheduler_tasks):
+                time.sleep(0.1)
+            assert client.run_on_scheduler(_scheduler_tasks) == 0
+
+
+@pytest.mark.parametrize("address", ["tcp://127.0.0.1:8786", "127.0.0.1:8786", "tls://sched.example:8786",
+                                     "tcp://[::1]:8786"])
+def test_a_scheduler_address_of_the_usual_forms_is_accepted(address):
+    assert check_scheduler(address) == address
+
+
+@pytest.mark.parametrize("address", ["my-cluster", "http://host:8786", "tcp://host", "tcp://host:port"])
+def test_a_malformed_scheduler_address_is_refused_with_the_allowed_form(address):
+    with pytest.raises(SchedulerError, match="tcp://HOST:PORT"):
+        check_scheduler(address)

@@ -102,3 +102,26 @@ def test_tolerance_command_writes_summary_samples_and_histogram(tmp_path):
     assert (out / "histogram.png").stat().st_size > 10_000
     assert main(["tolerance", "--case", str(CASE), "--samples", "0", "--out", str(out),
                  "--stiffness", str(stiff), "--quiet"]) == 2
+
+
+def test_a_rerun_of_the_tolerance_command_gives_the_same_bytes(tmp_path):
+    # timings belong in logs and benchmarks, not in artifacts: summary.json holds no wall time
+    from fem.stiffness import save
+    from pipeline.cli import main
+    stiff = tmp_path / "s.json"
+    save(stiffness_for_tests(load_case(CASE)), stiff)
+    outs = [tmp_path / "a", tmp_path / "b"]
+    for out in outs:
+        assert main(["tolerance", "--case", str(CASE), "--samples", "400", "--seed", "5", "--out", str(out),
+                     "--stiffness", str(stiff), "--workers", "1", "--quiet"]) == 0
+    summary = json.loads((outs[0] / "summary.json").read_text())
+    assert not [k for k in summary if "wall" in k]
+    for name in ("summary.json", "samples.csv"):
+        assert (outs[0] / name).read_bytes() == (outs[1] / name).read_bytes(), name
+
+
+def test_a_limit_that_is_not_positive_is_refused():
+    task = tol.ChunkTask(None, None, None, tol.ToleranceBands(), 0)
+    for limit in (0.0, -1.0, float("nan")):
+        with pytest.raises(fb.FourBarError, match="accuracy limit"):
+            tol.monte_carlo(task, 10, limit_arcsec=limit)

@@ -6,14 +6,8 @@ pairs at a few torques, adds a random encoder zero per pair, Gaussian angle nois
 quantisation (both encoders, `encoder_bits` counts per turn), and returns BenchRecords exactly as
 the loader would (write them with `write_records` to test the CLI). Truth is kept beside the
 records in `HiddenEffect.truth`, in the units diagnosis.json reports.
-Sizes drawn (a tolerance-class error, well above the noise):
-  output_coaxiality         e in [5, 25] um, phase in [-180, 180) deg
-  crank_eccentricity_error  one eccentric journal off size: disc 1's eccentric on one crank j
-                            (uniform over the cranks) by e, |e| in [4, 10] um, either sign
-                            (Errors.eccentric_error_um); the model answers a zp x line of ~0.85
-                            arcsec per um (RV-40E, signatures.py), 3.4-8.5 arcsec here.
-  torsional_stiffness       factor c in [0.55, 0.8] or [1.3, 1.8] on every FE stiffness
-  backlash                  extra pin clearance in [4, 12] um (equidistant modification)
+Causes and sizes drawn: every registered cause with a `draw` (causes/, `drawable_causes()`); each
+cause module states its tolerance-class range, well above the noise.
 """
 from __future__ import annotations
 
@@ -22,51 +16,35 @@ from pathlib import Path
 
 import numpy as np
 
+from dynamics.records import BenchRecord, write_record
 from dynamics.results import ARCSEC_PER_DEG
-from pipeline.diagnosis.signatures import _backlash, _coaxiality, _eccentric, _stiffness, eccentric_pattern
-from pipeline.records import BenchRecord, write_record
+from pipeline.diagnosis import causes
 
-CAUSES = ("output_coaxiality", "crank_eccentricity_error", "torsional_stiffness", "backlash")
+
+def drawable_causes() -> tuple[str, ...]:
+    """Ids of the registered causes the virtual bench can hide, in registry order."""
+    return tuple(c.id for c in causes.CAUSES if c.drawable)
 
 
 @dataclass(frozen=True)
 class HiddenEffect:
     cause: str
-    p: tuple[float, ...]          # parameters in signatures.py units
+    p: tuple[float, ...]          # model parameters of the cause (its params(case))
     truth: dict = field(default_factory=dict)
 
 
 def draw_effect(rng: np.random.Generator, case, cause: str) -> HiddenEffect:
-    if cause == "output_coaxiality":
-        e, ph = rng.uniform(5.0, 25.0), rng.uniform(-180.0, 180.0)
-        return HiddenEffect(cause, (e * np.cos(np.radians(ph)), e * np.sin(np.radians(ph))),
-                            {"output_coaxiality_um": e, "output_coaxiality_phase_deg": ph})
-    if cause == "crank_eccentricity_error":
-        n = case.carrier.crank_count
-        j, e = int(rng.integers(n)), rng.uniform(4.0, 10.0) * (1.0 if rng.random() < 0.5 else -1.0)
-        p = np.zeros(n)
-        p[j] = e
-        a, ph, _ = eccentric_pattern(p)
-        return HiddenEffect(cause, tuple(float(v) for v in p), {
-            "crank_eccentricity_error_um": [float(v) for v in p], "crank_eccentricity_error_crank": j + 1,
-            "crank_eccentricity_error_single_um": float(e), "crank_eccentricity_error_amplitude_um": a,
-            "crank_eccentricity_error_phase_deg": ph})
-    if cause == "torsional_stiffness":
-        c = rng.uniform(0.55, 0.8) if rng.random() < 0.5 else rng.uniform(1.3, 1.8)
-        return HiddenEffect(cause, (1.0 / c - 1.0,), {"stiffness_factor": c})
-    if cause == "backlash":
-        um = rng.uniform(4.0, 12.0)
-        return HiddenEffect(cause, (um,), {"pin_clearance_um": um})
-    raise ValueError(f"cause {cause!r}: allowed {', '.join(CAUSES)}")
-
-
-_APPLY = {"output_coaxiality": _coaxiality, "crank_eccentricity_error": _eccentric,
-          "torsional_stiffness": _stiffness, "backlash": _backlash}
+    """A seeded tolerance-class instance of `cause` (its module's `draw`)."""
+    found = [c for c in causes.CAUSES if c.id == cause and c.drawable]
+    if not found:
+        raise ValueError(f"cause {cause!r}: allowed {', '.join(drawable_causes())}")
+    p, truth = found[0].draw(rng, case)
+    return HiddenEffect(cause, tuple(p), truth)
 
 
 def apply_effects(case, stiffness, effects):
     for e in effects:
-        case, stiffness = _APPLY[e.cause](case, stiffness, np.asarray(e.p, float))
+        case, stiffness = causes.get(e.cause).apply(case, stiffness, np.asarray(e.p, float))
     return case, stiffness
 
 

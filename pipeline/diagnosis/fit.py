@@ -10,7 +10,7 @@ common factor; it enters when p < p_enter (Bonferroni over the candidates still 
 must also explain at least `min_share` of the weighted residual power left after the offsets.
 Where another candidate explains the same features nearly as well (within `ambiguity` of its
 dchi2) both are reported: the evidence cannot separate them (e.g. two zp x sources).
-Limits: linear in the parameters (unit-size signatures); extension.py refines on the full model.
+Limits: linear in the parameters (unit-size signatures); diagnose.py refines on the full model.
 """
 from __future__ import annotations
 

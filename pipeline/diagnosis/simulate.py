@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from pipeline.records import BenchRecord
+from dynamics.records import BenchRecord
 
 # te_model(case, stiffness, input_angle_deg, torque_Nm, direction) -> te_arcsec at those angles;
 # torque_Nm in the record convention (+ resists forward rotation), scalar or one per angle

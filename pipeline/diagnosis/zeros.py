@@ -13,7 +13,7 @@ Limits: rule 2 cannot tell a paired run from two independent zeroings; say `enco
 """
 from __future__ import annotations
 
-from pipeline.records import BenchRecord
+from dynamics.records import BenchRecord
 
 
 def group_records(records: list[BenchRecord], torque_tol_Nm: float = 5.0,

@@ -1,4 +1,5 @@
-"""Bench records: the CSV format shared by the bench and the simulator (DESIGN.md).
+"""Bench records: the CSV format shared by the bench and the simulator (DESIGN.md); the one home
+of this file contract (dynamics' simulate writes records, pipeline's diagnosis reads them).
 
 Header `time_s,input_angle_deg,output_angle_deg,output_torque_Nm`, unwrapped encoder angles
 (positive forward), torque positive when the load resists forward rotation, `#` comment lines
@@ -9,7 +10,8 @@ Loader (`read_record`): checks every row and names the file and the 1-based line
 one output revolution). Other column names or headerless files are read only through an explicit
 column map: nothing is guessed. The conditions the diagnosis simulates (input speed, torque,
 direction) are read from the record's own samples, not from its comments; comments are kept
-(they carry notes such as `# encoder_zero: <id>`).
+(they carry notes such as `# encoder_zero: <id>`). A path that is no readable UTF-8 text file (a
+folder, no permission, binary or other-encoding content) is refused in one line naming the file.
 """
 from __future__ import annotations
 
@@ -41,6 +43,16 @@ def write_record(path: str | Path, time_s, input_angle_deg, output_angle_deg, ou
     with atomic_path(path) as tmp:
         np.savetxt(tmp, np.column_stack(cols), delimiter=",", header=header, comments="",
                    fmt="%.10g")
+
+
+def write_te_result(path: str | Path, result, comments: list[str] = ()) -> None:
+    """A simulated run (dynamics.results.TEResult) as a bench record, plus te_arcsec and
+    teeth_in_contact_disc<k> columns."""
+    extra = {"te_arcsec": result.te_arcsec}
+    for d in range(result.teeth_in_contact.shape[1]):
+        extra[f"teeth_in_contact_disc{d + 1}"] = result.teeth_in_contact[:, d]
+    write_record(path, result.t_s, result.input_angle_deg, result.output_angle_deg,
+                 result.output_torque_Nm, comments=list(comments), extra=extra)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -132,12 +144,7 @@ def read_record(path: str | Path, columns: dict[str, str | int] | None = None,
     Without it the four DESIGN.md names must be present: nothing is guessed.
     """
     path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except FileNotFoundError:
-        raise RecordError(f"{path}: record not found") from None
-    except UnicodeDecodeError as exc:
-        raise RecordError(f"{path}: not a text file ({exc.reason})") from None
+    lines = _text_lines(path)
     comments, rows = [], []
     for lineno, line in enumerate(lines, start=1):
         s = line.strip()
@@ -200,6 +207,32 @@ def read_record(path: str | Path, columns: dict[str, str | int] | None = None,
     t, a_in, a_out, torque = data.T
     _check_record(path, [ln for ln, _ in rows], t, a_in, a_out)
     return BenchRecord(str(path), t, a_in, a_out, torque, tuple(comments), extra)
+
+
+_ALLOWED = f"a record is a UTF-8 text CSV with the header {','.join(COLUMNS)}"
+
+
+def _text_lines(path: Path) -> list[str]:
+    """The lines of a record file; anything that is not a readable UTF-8 text file is refused."""
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise RecordError(f"{path}: record not found") from None
+    except IsADirectoryError:
+        raise RecordError(f"{path}: is a folder, not a record file; {_ALLOWED}") from None
+    except PermissionError:
+        raise RecordError(f"{path}: cannot be read (permission denied); {_ALLOWED}") from None
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot be read ({exc.strerror or exc}); {_ALLOWED}") from None
+    nul = raw.find(b"\0")   # valid UTF-8 can hold NUL bytes, a CSV cannot: a binary file
+    if nul >= 0:
+        raise RecordError(f"{path}: binary content (NUL byte at offset {nul}); {_ALLOWED}")
+    try:
+        text = raw.decode("utf-8-sig")   # a spreadsheet's byte-order mark is not part of the header
+    except UnicodeDecodeError as exc:
+        raise RecordError(f"{path}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}); "
+                          f"{_ALLOWED} (re-save it as UTF-8)") from None
+    return text.splitlines()
 
 
 def _is_number(s: str) -> bool:

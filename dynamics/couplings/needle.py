@@ -1,0 +1,123 @@
+"""Turning-arm (needle roller) bearing: the eccentric of crank j under disc d in crank hole j of disc d.
+
+Eccentric centre X_e = seat_j(q_carrier) + u_j + e_dj (cos, sin)(phi_j + phase_dj), seat_j at radius
+a_j and angle b_j on the carrier, u_j the crank axis displacement, e_dj the eccentric radius;
+crank-hole centre X_h = c_d + r_j (cos, sin)(alpha_d + b_j) on disc d (centre c_d, rotation alpha_d).
+Law (fem.stiffness.turning_arm, FE): F = k x^n along D = X_e - X_h, x = |D| - clearance
+(case.errors.turning_arm_clearance_um), V = k x^(n+1) / (n+1). Damping beta K_t D', K_t the 2x2
+tangent, ramped in over DAMP_RAMP_M of approach when there is a clearance.
+As-built parameters (case.errors): crank_eccentricity_um (both eccentrics of crank j),
+eccentric_error_um (disc 1's eccentric only), crank_hole_position_um (a_j of the holes on both
+discs), output_bearing_hole_um (a_j of the seat in the carrier).
+Output: bearing_force_N (nd, nc, 2), the force ON disc d, ground frame.
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from dynamics.couplings.base import kernel, ramp
+
+NAME = "needle"
+
+
+class Params(NamedTuple):
+    k_N_per_m_pow: float
+    n: float
+    clearance_m: float
+    seat_radius_m: np.ndarray      # (nc,) crank seat in the carrier
+    seat_angle_rad: np.ndarray     # (nc,)
+    ecc_m: np.ndarray              # (nd, nc) eccentric radius under disc d
+    ecc_phase_rad: np.ndarray      # (nd, nc) eccentric angle from the crank rotation DOF
+    hole_radius_m: np.ndarray      # (nc,) crank hole in the disc
+    hole_angle_rad: np.ndarray     # (nc,) in the disc frame
+    dof: np.ndarray                # (nd, nc, 7) carrier, crank rot, axis x, y, disc x, y, rot
+    out0: int                      # offset of bearing_force_N in the work's outputs
+
+
+def _per_crank(values: tuple, n: int) -> np.ndarray:
+    v = np.asarray(values, dtype=float) * 1e-6
+    return np.full(n, v[0]) if len(v) == 1 else v
+
+
+def params(case, stiffness, layout, slots) -> Params:
+    cy, cr, er = case.cycloid, case.carrier, case.errors
+    nc, nd = cr.crank_count, cy.disc_count
+    a = cr.crank_circle_radius_mm * 1e-3
+    b = 2 * np.pi * np.arange(nc) / nc
+    ecc = cy.eccentricity_mm * 1e-3 + _per_crank(er.crank_eccentricity_um, nc)
+    de1 = _per_crank(er.eccentric_error_um, nc)
+    car, rot, axis, disc = (layout[k] for k in ("carrier", "crank_rotation", "crank_axis", "disc"))
+    dof = np.array([[[car.index(), rot.index(j), axis.index(j, "x"), axis.index(j, "y"),
+                      disc.index(d, "x"), disc.index(d, "y"), disc.index(d, "rot")]
+                     for j in range(nc)] for d in range(nd)], dtype=np.int64)
+    ta = stiffness.turning_arm
+    return Params(
+        k_N_per_m_pow=float(ta.law_k_N_per_m_pow), n=float(ta.law_n),
+        clearance_m=er.turning_arm_clearance_um * 1e-6,
+        seat_radius_m=a + _per_crank(er.output_bearing_hole_um, nc), seat_angle_rad=b,
+        ecc_m=np.array([ecc + de1 if d == 0 else ecc for d in range(nd)]),
+        ecc_phase_rad=np.array([[math.pi * d] * nc for d in range(nd)]),   # discs 180 deg apart
+        hole_radius_m=a + _per_crank(er.crank_hole_position_um, nc), hole_angle_rad=b,
+        dof=dof, out0=slots.output("bearing_force_N", (nd, nc, 2)))
+
+
+@kernel
+def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
+    """Coupling interface (see dynamics.couplings)."""
+    f, K, C = w.f, w.K, w.C
+    kta, nta, cta = p.k_N_per_m_pow, p.n, p.clearance_m
+    nd, nc = p.dof.shape[0], p.dof.shape[1]
+    Gm = np.empty((2, 7))              # dD / dq over the seven DOFs of the pair
+    gr = np.empty(7)
+    for d in range(nd):
+        for j in range(nc):
+            idx = p.dof[d, j]
+            a, ecc, hr = p.seat_radius_m[j], p.ecc_m[d, j], p.hole_radius_m[j]
+            pe = q[idx[1]] + p.ecc_phase_rad[d, j]
+            ca, sa = math.cos(q[idx[0]] + p.seat_angle_rad[j]), math.sin(q[idx[0]] + p.seat_angle_rad[j])
+            ce, se = math.cos(pe), math.sin(pe)
+            ch, sh = math.cos(q[idx[6]] + p.hole_angle_rad[j]), math.sin(q[idx[6]] + p.hole_angle_rad[j])
+            Dx = a * ca + q[idx[2]] + ecc * ce - q[idx[4]] - hr * ch
+            Dy = a * sa + q[idx[3]] + ecc * se - q[idx[5]] - hr * sh
+            Gm[0, 0], Gm[1, 0] = -a * sa, a * ca
+            Gm[0, 1], Gm[1, 1] = -ecc * se, ecc * ce
+            Gm[0, 2], Gm[1, 2], Gm[0, 3], Gm[1, 3] = 1.0, 0.0, 0.0, 1.0
+            Gm[0, 4], Gm[1, 4], Gm[0, 5], Gm[1, 5] = -1.0, 0.0, 0.0, -1.0
+            Gm[0, 6], Gm[1, 6] = hr * sh, -hr * ch
+            r = math.sqrt(Dx * Dx + Dy * Dy) + 1e-300
+            ex, ey = Dx / r, Dy / r
+            x = r - cta
+            o = p.out0 + 2 * (d * nc + j)
+            w.out[o] = 0.0
+            w.out[o + 1] = 0.0
+            if x <= 0.0:
+                continue
+            F = kta * x ** nta
+            kt = nta * kta * x ** (nta - 1.0)
+            fr = F / r
+            rb = beta * (ramp(x) if cta > 0.0 else 1.0)
+            # viscous force beta * K_t * D_dot, K_t the bearing's 2x2 tangent (continuous through D = 0)
+            Ddx, Ddy = 0.0, 0.0
+            for c in range(7):
+                gr[c] = ex * Gm[0, c] + ey * Gm[1, c]
+                Ddx += Gm[0, c] * v[idx[c]]
+                Ddy += Gm[1, c] * v[idx[c]]
+            rd = ex * Ddx + ey * Ddy
+            Fx = F * ex + rb * (kt * rd * ex + fr * (Ddx - rd * ex))
+            Fy = F * ey + rb * (kt * rd * ey + fr * (Ddy - rd * ey))
+            for c in range(7):
+                f[idx[c]] -= Fx * Gm[0, c] + Fy * Gm[1, c]
+            w.out[o] = Fx
+            w.out[o + 1] = Fy
+            V += kta * x ** (nta + 1.0) / (nta + 1.0)
+            if want_k:
+                for c1 in range(7):
+                    for c2 in range(7):
+                        perp = (Gm[0, c1] * Gm[0, c2] + Gm[1, c1] * Gm[1, c2]) - gr[c1] * gr[c2]
+                        kk = kt * gr[c1] * gr[c2] + fr * perp
+                        K[idx[c1], idx[c2]] += kk
+                        C[idx[c1], idx[c2]] += rb * kk
+    return V, tau_in, True

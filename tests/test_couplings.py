@@ -1,0 +1,215 @@
+"""The lumped model as couplings (dynamics.couplings): each coupling alone against finite
+differences and its own potential, the registry sum, the DOF layout, the kernel cache stamp, and
+the chunked time integration (bit-identical to one chunk; signals act between chunks)."""
+import math
+import shutil
+import signal
+import time
+
+import numpy as np
+import pytest
+
+from dynamics import couplings
+from dynamics.couplings import REGISTRY, base
+from dynamics.layout import DofLayout
+from dynamics.loads import LoadSpec, input_angle_deg, input_speed_deg_s, load_torque_Nm
+from dynamics.model import evaluate, run_dynamics, simulate, solve_static
+from support import model_for_tests
+
+NAMES = [m.NAME for m in REGISTRY]
+
+
+@pytest.fixture(scope="module")
+def loaded():
+    """rv40e-81 with both bearing clearances open (every branch of every coupling is live) at
+    300 N m, and a random velocity for the damping terms."""
+    model = model_for_tests("rv40e-81", turning_arm_clearance_um=2.0, support_clearance_um=1.0)
+    s = solve_static(model, 10.0, 300.0)
+    v = np.random.default_rng(3).normal(size=model.n_dof) * 1e-3 / model.scale
+    return model, s, v
+
+
+def _alone(model, name):
+    """Model arrays with only the coupling `name` registered (same Work slots)."""
+    i = NAMES.index(name)
+    return model.arrays._replace(couplings=(model.arrays.couplings[i],))
+
+
+def _eval(model, arrays, q, v, th, beta=0.0, want_k=True):
+    w = model.work()
+    V, tau, ok = couplings.assemble(q, v, th, 0.0, beta, want_k, arrays, w)
+    return w, V, tau, ok
+
+
+def test_the_assembler_is_the_sum_of_the_registered_couplings(loaded):
+    model, s, v = loaded
+    th = math.radians(s.input_angle_deg)
+    w, V, tau, ok = _eval(model, model.arrays, s.q, v, th, beta=1e-5)
+    parts = [_eval(model, _alone(model, n), s.q, v, th, beta=1e-5) for n in NAMES]
+    assert ok and all(p[3] for p in parts)
+    for attr in ("f", "K", "C"):
+        total = sum(getattr(p[0], attr) for p in parts)
+        assert np.allclose(getattr(w, attr), total, rtol=1e-13, atol=1e-13 * np.abs(total).max())
+    assert V == pytest.approx(sum(p[1] for p in parts), rel=1e-13)
+    assert tau == pytest.approx(sum(p[2] for p in parts), rel=1e-13)
+    # every coupling carries load at this state (a registry entry that adds nothing would pass above)
+    assert all(np.abs(p[0].f).max() > 1.0 for p in parts)
+
+
+# Tangent -df/dq against central differences (scaled: rotations as N m / ROT_SCALE_M), per coupling.
+# Left out of the tangents on purpose (Newton converges without them): force x curvature terms
+# (pin: profile curvature; needle: the turning arms of seat, eccentric and hole) and the mesh's
+# d k_s/ds terms (zero away from the single/double contact edges, as here). Measured on this state
+# (largest error / largest entry): mesh 1e-10, support 3e-10, needle 1.2e-6, pin 3.4e-4.
+TANGENT_RTOL = {"mesh": 1e-6, "support": 1e-6, "needle": 1e-5, "pin": 1e-3}
+# f = -dV/dq: exact but for the pin law's k(phase), which is not differentiated. Measured: mesh,
+# support 1e-10, needle 4e-8 (round-off of V), pin 1.7e-4 of the largest force.
+POTENTIAL_RTOL = {"mesh": 1e-6, "support": 1e-6, "needle": 1e-6, "pin": 1e-3}
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_each_coupling_tangent_matches_finite_differences_of_its_force(loaded, name):
+    model, s, _ = loaded
+    arrays, th = _alone(model, name), math.radians(s.input_angle_deg)
+    K = _eval(model, arrays, s.q, np.zeros(model.n_dof), th)[0].K.copy()
+    h0 = min(1e-9, 0.2 * np.abs(s.pin_gap_m).min())     # never straddle a pin's contact onset
+    Kfd = np.zeros_like(K)
+    for j in range(model.n_dof):
+        e = np.zeros(model.n_dof)
+        e[j] = h0 / model.scale[j]
+        fp = _eval(model, arrays, s.q + e, np.zeros(model.n_dof), th, want_k=False)[0].f
+        fm = _eval(model, arrays, s.q - e, np.zeros(model.n_dof), th, want_k=False)[0].f
+        Kfd[:, j] = -(fp - fm) / (2 * e[j])
+    S = np.diag(1 / model.scale)
+    scale = np.abs(S @ K @ S).max()
+    assert scale > 0
+    assert np.abs(S @ (K - Kfd) @ S).max() < TANGENT_RTOL[name] * scale
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_each_coupling_force_is_minus_the_gradient_of_its_potential(loaded, name):
+    model, s, _ = loaded
+    arrays, th = _alone(model, name), math.radians(s.input_angle_deg)
+    z = np.zeros(model.n_dof)
+    f = _eval(model, arrays, s.q, z, th, want_k=False)[0].f.copy()
+    h0 = min(1e-9, 0.2 * np.abs(s.pin_gap_m).min())
+    g = np.zeros(model.n_dof)
+    for j in range(model.n_dof):
+        e = np.zeros(model.n_dof)
+        e[j] = h0 / model.scale[j]
+        g[j] = (_eval(model, arrays, s.q + e, z, th, want_k=False)[1]
+                - _eval(model, arrays, s.q - e, z, th, want_k=False)[1]) / (2 * e[j])
+    assert np.abs((f + g) / model.scale).max() < POTENTIAL_RTOL[name] * np.abs(f / model.scale).max()
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_each_coupling_damping_is_minus_the_velocity_derivative_of_its_force(loaded, name):
+    model, s, v = loaded
+    arrays, th, beta = _alone(model, name), math.radians(s.input_angle_deg), 2e-5
+    C = _eval(model, arrays, s.q, v, th, beta=beta)[0].C.copy()
+    Cfd = np.zeros_like(C)
+    for j in range(model.n_dof):
+        e = np.zeros(model.n_dof)
+        e[j] = 1e-6 / model.scale[j]
+        fp = _eval(model, arrays, s.q, v + e, th, beta=beta, want_k=False)[0].f
+        fm = _eval(model, arrays, s.q, v - e, th, beta=beta, want_k=False)[0].f
+        Cfd[:, j] = -(fp - fm) / (2 * e[j])
+    S = np.diag(1 / model.scale)
+    assert np.abs(S @ C @ S).max() > 0
+    assert np.abs(S @ (C - Cfd) @ S).max() < 1e-6 * np.abs(S @ C @ S).max()
+
+
+def test_the_standard_layout_names_the_blocks_of_the_original_index_arithmetic():
+    nc, nd = 3, 2
+    lay = DofLayout.standard(nc, nd)
+    assert lay.n == 1 + 3 * nc + 3 * nd
+    assert lay["carrier"].index() == 0
+    assert [lay["crank_rotation"].index(j) for j in range(nc)] == [1 + j for j in range(nc)]
+    assert [lay["crank_axis"].index(j, "y") for j in range(nc)] == [2 + nc + 2 * j for j in range(nc)]
+    assert [lay["disc"].index(d, "rot") for d in range(nd)] == [3 + 3 * nc + 3 * d for d in range(nd)]
+    assert lay.labels[:2] == ("carrier", "crank1_rot") and lay.labels[-1] == "disc2_rot"
+    assert list(lay.scale(0.05)) == [0.05] * 4 + [1.0] * 6 + [1.0, 1.0, 0.05] * 2
+    with pytest.raises(IndexError, match="disc"):
+        lay["disc"].index(2)
+    with pytest.raises(KeyError, match="crank_axis"):
+        lay["pillar"]
+
+
+def test_a_layout_with_an_extra_block_moves_the_coupling_index_tables_with_it():
+    # a later block (here: a crank axis tilt per crank) shifts the discs; couplings built on the
+    # new layout address the discs through their tables, the solvers see only n
+    lay = DofLayout.build([("carrier", 1, ("rot",), (True,), ""),
+                           ("crank_rotation", 3, ("rot",), (True,), "crank"),
+                           ("crank_axis", 3, ("x", "y"), (False, False), "crank"),
+                           ("crank_tilt", 3, ("a", "b"), (True, True), "crank"),
+                           ("disc", 2, ("x", "y", "rot"), (False, False, True), "disc")])
+    model = model_for_tests()
+    p = couplings.pin.params(model.case, model.stiffness, lay, couplings.Slots())
+    assert p.dof.tolist() == [[16, 17, 18], [19, 20, 21]]
+    n = couplings.needle.params(model.case, model.stiffness, lay, couplings.Slots())
+    assert n.dof[1, 2].tolist() == [0, 3, 8, 9, 19, 20, 21]
+
+
+def test_every_kernel_cache_is_stamped_with_the_sources_of_the_whole_compiled_unit(tmp_path):
+    from dynamics import kernels
+    disps = [couplings.assemble, kernels.integrate, kernels.static_solve, base.foot_point] \
+        + [m.add for m in REGISTRY]
+    for d in disps:
+        assert base.cache_stamp(d)[1] == base.KERNEL_DIGEST
+    names = {p.name for p in base.KERNEL_SOURCES}
+    assert {"pin.py", "mesh.py", "kernels.py", "pin_profile.py", "__init__.py"} <= names
+    # the digest sees a one-byte change in any file of the unit
+    copies = [shutil.copy(p, tmp_path / f"{i}_{p.name}") for i, p in enumerate(base.KERNEL_SOURCES)]
+    assert base.sources_digest(copies) == base.sources_digest(copies)
+    with open(copies[-1], "a") as fh:
+        fh.write(" ")
+    assert base.sources_digest(copies) != base.sources_digest([*copies[:-1], base.KERNEL_SOURCES[-1]])
+
+
+def _drive(duration_s, load):
+    dt, n = 1e-4, int(round(duration_s / 1e-4))
+    t = np.arange(n + 1) * dt
+    return (np.deg2rad(input_angle_deg(t, 1200.0, True)), np.deg2rad(input_speed_deg_s(t, 1200.0, True)),
+            np.asarray(load_torque_Nm(load, t), float), dt)
+
+
+def test_a_chunked_time_integration_is_bit_identical_to_one_chunk():
+    model = model_for_tests("rv40e-81", turning_arm_clearance_um=2.0)
+    th, w, T, dt = _drive(0.3, LoadSpec("square", 300.0))
+    q0 = solve_static(model, math.degrees(th[0]), T[0]).q
+    runs = [run_dynamics(model, q0, np.zeros_like(q0), th, w, T, dt, 5, 0.05, 1e-5, chunk_steps=c)
+            for c in (len(th), 7, 1)]
+    assert [r.chunks for r in runs] == [1, math.ceil(len(th) / 7), len(th)]
+    ref = runs[0]
+    assert ref.status == 0 and ref.newton_iterations > len(th)
+    for r in runs[1:]:
+        for a, b in zip(ref.samples, r.samples):
+            assert np.array_equal(a, b)
+        for a, b in zip(ref.state, r.state):
+            assert np.array_equal(a, b)
+
+
+class _Alarm(Exception):
+    pass
+
+
+def test_a_signal_handler_acts_within_a_second_during_a_long_simulation():
+    model = model_for_tests()
+    simulate(model, LoadSpec("sine", 300.0), duration_s=0.01)          # compiled and cached
+    fired = []
+
+    def handler(signum, frame):
+        fired.append(time.perf_counter())
+        raise _Alarm
+
+    old = signal.signal(signal.SIGALRM, handler)
+    try:
+        t_due = time.perf_counter() + 1.0
+        signal.setitimer(signal.ITIMER_REAL, 1.0)
+        with pytest.raises(_Alarm):       # 30 s simulated take ~15 s of wall time: interrupted
+            simulate(model, LoadSpec("sine", 300.0), duration_s=30.0, store_pin_forces=False)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, old)
+    # Python runs the handler when the kernel returns (chunks of ~CHUNK_WALL_S = 0.1 s)
+    assert 0.0 <= fired[0] - t_due < 1.0
