@@ -189,13 +189,19 @@ def _sigma_csv(tab, forms, torques) -> str:
 
 
 def cmd_hysteresis(args) -> int:
+    from dynamics.budget import compliance_budget
     from dynamics.catalog import hysteresis
     from pipeline.render import figure, save_figure
     model, spath = _model(args)
     res = hysteresis(model)
+    budget = compliance_budget(model)
     out = Path(args.out)
     write_json_atomic(out / "hysteresis.json", {"case": model.case.name, "stiffness": str(spath),
                                                 **res.summary(),
+                                                "compliance_budget": budget["compliance_budget"],
+                                                "compliance_budget_by_coupling": budget["by_coupling"],
+                                                "tangent_rigidity_at_rated_Nm_per_arcmin":
+                                                    budget["tangent_rigidity_Nm_per_arcmin"],
                                                 "made_from": _made_from(model, "rv-hysteresis/1").to_json()})
     buf = io.StringIO()
     np.savetxt(buf, np.column_stack([res.torque_Nm, res.output_angle_arcmin]), delimiter=",",
@@ -211,6 +217,8 @@ def cmd_hysteresis(args) -> int:
     save_figure(fig, out / "hysteresis.png")
     _say(args, f"hysteresis: {out}/hysteresis.json: rigidity {res.torsional_rigidity_Nm_per_arcmin:.1f} "
                f"N m/arcmin, lost motion {res.lost_motion_arcmin:.3f} arcmin, backlash {res.backlash_arcmin:.3f} arcmin")
+    _say(args, "compliance budget at rated torque: " + ", ".join(
+        f"{k} {100 * v:.1f} %" for k, v in sorted(budget["compliance_budget"].items(), key=lambda kv: -kv[1])))
     return 0
 
 
