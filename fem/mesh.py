@@ -118,7 +118,9 @@ def triangulate(loop: np.ndarray, h_max: float, *, holes: np.ndarray | None = No
     if holes is not None and len(holes):
         data["holes"] = np.asarray(holes, float)
     area = np.sqrt(3) / 4 * h_max ** 2
-    out = triangle.triangulate(data, f"pq30Ya{area:.6e}")
+    # Triangle reads the area switch as a plain decimal ("a1.7e-06" is taken as a = 1.7), so write
+    # it positional, every digit kept
+    out = triangle.triangulate(data, f"pq30Ya{np.format_float_positional(area, trim='-')}")
     for _ in range(12 if size is not None else 0):
         p, t = out["vertices"], out["triangles"]
         want = np.sqrt(3) / 4 * size(p[t].mean(axis=1)) ** 2

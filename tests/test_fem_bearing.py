@@ -24,9 +24,10 @@ def test_most_loaded_needle_matches_stribeck_and_the_load_zone_ends_at_90_deg(fe
     # rigid races; measured 1.3 % below (the races' own compliance spreads the load); band 4 %
     qmax = fe.needle_load_N.max(axis=1)
     assert np.allclose(qmax / fe.stribeck_qmax_N, 1, atol=0.04)
-    # needles at |psi| >= 90 deg carry nothing (zero clearance), so the truncated model is complete
+    # needles at |psi| >= 90 deg carry next to nothing (zero clearance; the elastic races spread the
+    # zone by a hair: 0.07 % of Q_max at 90 deg under 5 kN), so the truncated model is complete
     far = np.abs(fe.needle_angle_deg) >= 90 - 1e-9
-    assert np.all(fe.needle_load_N[:, far] == 0) and np.all(fe.needle_load_N[:, ~far] > 0)
+    assert np.all(fe.needle_load_N[:, far] <= 1e-3 * qmax[:, None]) and np.all(fe.needle_load_N[:, ~far] > 0)
 
 
 def test_bearing_deflection_is_the_needle_hertz_sum_plus_a_little_ring_ovalisation(fe):
