@@ -46,7 +46,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from fem import elastic, hertz
-from fem.mesh import Mesh2D, graded_parameters
+from fem.mesh import Mesh2D, graded_parameters, triangulate
 from geometry.artifacts import InputError
 from geometry.clearance import pin_contacts
 from geometry.profile import cycloid_xy, profile_args
@@ -117,36 +117,9 @@ def _circle_loop(cx, cy, r, h):
 def _pslg_triangulate(closed: list[np.ndarray], open_runs: list[np.ndarray], hole_marks, h_max: float,
                       size) -> tuple[np.ndarray, np.ndarray]:
     """Triangle quality mesh of closed loops plus open polylines (internal lines kept as edges),
-    graded by size(xy) -> h; input vertices come first, in order (as fem.mesh.triangulate, which
-    takes closed loops only)."""
-    import triangle
-    verts, segs, start = [], [], 0
-    for pts, closed_loop in [(c, True) for c in closed] + [(o, False) for o in open_runs]:
-        i = np.arange(start, start + len(pts))
-        segs.append(np.column_stack([i, np.roll(i, -1)]) if closed_loop else np.column_stack([i[:-1], i[1:]]))
-        verts.append(pts)
-        start += len(pts)
-    verts = np.vstack(verts)
-    data = {"vertices": verts, "segments": np.vstack(segs)}
-    if len(hole_marks):
-        data["holes"] = np.asarray(hole_marks, float)
-    cap = np.sqrt(3) / 4 * h_max ** 2
-    # fixed-point: Triangle's switch parser reads no exponent ("a1.7e-06" would mean a = 1.7)
-    out = triangle.triangulate(data, f"pq30Ya{cap:.24f}")
-    for _ in range(12):
-        p, t = out["vertices"], out["triangles"]
-        want = np.sqrt(3) / 4 * size(p[t].mean(axis=1)) ** 2
-        e1, e2 = p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]
-        if np.all(0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]) <= 1.5 * want):
-            break
-        out = triangle.triangulate(dict(out, triangle_max_area=np.minimum(want, cap)), "rpq30Ya")
-    p, t = out["vertices"], out["triangles"].astype(np.int64)
-    e1, e2 = p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]
-    cw = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0
-    t[cw] = t[cw][:, [0, 2, 1]]
-    if len(p) < len(verts) or not np.allclose(p[:len(verts)], verts):
-        raise InputError("disc mesh: the triangulation moved boundary vertices (overlapping holes?)")
-    return p, t
+    graded by size(xy) -> h; input vertices come first, in order (fem.mesh.triangulate)."""
+    return triangulate(closed[0], h_max, holes=np.asarray(hole_marks, float), extra_loops=closed[1:],
+                       size=size, open_runs=open_runs)
 
 
 def _arc_runs(radius: float, h: float, circles) -> tuple[list[np.ndarray], list[np.ndarray]]:

@@ -103,16 +103,20 @@ def _segments(counts: list[int]) -> np.ndarray:
 
 
 def triangulate(loop: np.ndarray, h_max: float, *, holes: np.ndarray | None = None,
-                extra_loops: list[np.ndarray] = (), size: Callable | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Quality triangulation of a closed polygon (vertices kept, none added on the boundary);
-    size(xy) -> element size [m] grades the interior too (refined until every triangle fits)."""
+                extra_loops: list[np.ndarray] = (), size: Callable | None = None,
+                open_runs: list[np.ndarray] = ()) -> tuple[np.ndarray, np.ndarray]:
+    """Quality triangulation of a closed polygon (vertices kept, in order, none added on the
+    boundary); extra closed loops and open polylines (`open_runs`, kept as internal edges) may be
+    added; size(xy) -> element size [m] grades the interior too (refined until every triangle fits)."""
     import triangle
     loops = [np.asarray(loop, float), *[np.asarray(l, float) for l in extra_loops]]
-    verts = np.vstack(loops)
+    runs = [np.asarray(r, float) for r in open_runs]
+    verts = np.vstack(loops + runs)
     segs, start = [], 0
-    for l in loops:
+    for l in loops + runs:
         i = np.arange(start, start + len(l))
-        segs.append(np.column_stack([i, np.roll(i, -1)]))
+        closed = len(segs) < len(loops)
+        segs.append(np.column_stack([i, np.roll(i, -1)]) if closed else np.column_stack([i[:-1], i[1:]]))
         start += len(l)
     data = {"vertices": verts, "segments": np.vstack(segs)}
     if holes is not None and len(holes):
