@@ -47,7 +47,7 @@ class Samples(NamedTuple):
     energy: np.ndarray         # (ns, 4) kinetic, potential, input work, load work (cumulative)
 
 
-@kernel
+@kernel(inline=True)
 def _static_residual(w, io, torque, scale):
     """Scaled residual of the static balance (internal force + load torque at io) and its 2-norm."""
     rs = w.f.copy()
@@ -73,8 +73,9 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
     rs, norm2 = _static_residual(w, io, torque, scale)
     norm = np.max(np.abs(rs))
     dmax = 0.0
+    K = w.K
     for i in range(n):
-        dmax = max(dmax, w.K[i, i] / scale[i] ** 2)
+        dmax = max(dmax, K[i, i] / scale[i] ** 2)
     mu = 1e-6 * dmax + 1.0
     A = np.empty((n, n))
     Kc = w.K.copy()
@@ -110,7 +111,7 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
     return q, max_iter, 1 if norm > tol_N else 0
 
 
-@kernel
+@kernel(inline=True)
 def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, loose):
     """One HHT-alpha step of size h; returns (q1, v1, a1, fn1, iterations, ok, V, tau)."""
     n = q.shape[0]
@@ -121,16 +122,17 @@ def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter,
     a = acc.copy()
     fext = np.zeros(n)
     fext[m.i_out] = -T1
+    f, K, C = w.f, w.K, w.C       # locals: no struct access inside the loops
     for it in range(max_iter):
         qn = qp + bet * h * h * a
         vn = vp + gam * h * a
         V, tau, ok = assemble(qn, vn, th1, w1, beta, True, m, w)
         if not ok:
             return q, v, acc, fn, it + 1, False, 0.0, 0.0
-        res = Mdiag * a - (1.0 - alpha) * (w.f + fext) - alpha * fn
+        res = Mdiag * a - (1.0 - alpha) * (f + fext) - alpha * fn
         for i in range(n):
             for j in range(n):
-                J[i, j] = (1.0 - alpha) * (gam * h * w.C[i, j] + bet * h * h * w.K[i, j])
+                J[i, j] = (1.0 - alpha) * (gam * h * C[i, j] + bet * h * h * K[i, j])
             J[i, i] += Mdiag[i]
         da = np.linalg.solve(J, -res)
         if not np.all(np.isfinite(da)):
@@ -145,7 +147,7 @@ def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter,
             q1 = qp + bet * h * h * a
             v1 = vp + gam * h * a
             V, tau, ok = assemble(q1, v1, th1, w1, beta, False, m, w)
-            return q1, v1, a, w.f + fext, it + 1, True, V, tau
+            return q1, v1, a, f + fext, it + 1, True, V, tau
     return q, v, acc, fn, max_iter, False, 0.0, 0.0
 
 
@@ -162,32 +164,33 @@ def integrate_start(st, th0, w0, T0, beta, Mdiag, m, w):
     return ok
 
 
-@kernel
+@kernel(inline=True)
 def _refresh_candidates(q, v, th, w_in, beta, m, w):
     """Every contact evaluated at the last converged state; those more than CANDIDATE_MARGIN_M
     open are skipped until the next refresh. Returns how many were closed but skipped."""
-    prev = w.active.copy()
-    w.active[:] = True
+    active, gap = w.active, w.gap
+    prev = active.copy()
+    active[:] = True
     assemble(q, v, th, w_in, beta, False, m, w)
     missed = 0
-    for c in range(w.gap.shape[0]):
-        if w.gap[c] < 0.0 and not prev[c]:
+    for c in range(gap.shape[0]):
+        if gap[c] < 0.0 and not prev[c]:
             missed += 1
-        w.active[c] = w.gap[c] < CANDIDATE_MARGIN_M
+        active[c] = gap[c] < CANDIDATE_MARGIN_M
     return missed
 
 
-@kernel
+@kernel(inline=True)
 def _record(si, q, v, V, tau, win, wload, Mdiag, m, w, out, store_force):
     out.q_out[si] = q[m.i_out]
     out.tau_in[si] = tau
-    out.teeth[si, :] = 0
-    for c in range(w.force.shape[0]):
-        g = m.contact_group[c]
-        if w.force[c] > 0.0 and g >= 0:
-            out.teeth[si, g] += 1
-        if store_force:
-            out.force[si, c] = w.force[c]
+    teeth, force, group = out.teeth, w.force, m.contact_group
+    teeth[si, :] = 0
+    for c in range(force.shape[0]):
+        if force[c] > 0.0 and group[c] >= 0:
+            teeth[si, group[c]] += 1
+    if store_force:
+        out.force[si, :] = force
     ek = 0.0
     for i in range(q.shape[0]):
         ek += 0.5 * Mdiag[i] * v[i] * v[i]
@@ -195,7 +198,7 @@ def _record(si, q, v, V, tau, win, wload, Mdiag, m, w, out, store_force):
     out.energy[si, 2], out.energy[si, 3] = win, wload
 
 
-@kernel
+@kernel(inline=True)
 def _advance(q, v, acc, fn, step, th_arr, w_arr, T_arr, dt, alpha, beta, m, w, scale, max_iter, tol_m,
              Mdiag, J):
     """Step `step` (th_arr[step - 1] -> th_arr[step]); a step whose Newton iteration does not

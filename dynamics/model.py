@@ -76,7 +76,7 @@ DEFAULT_SAMPLE_DT_S = 5e-4
 HHT_ALPHA = 0.05             # mild numerical dissipation of the unresolved contact modes
 NEWTON_TOL_M = 1e-11         # HHT Newton: largest correction of a step [m] (rotations times ROT_SCALE_M)
 NEWTON_MAX_ITER = 40
-CHUNK_WALL_S = 0.1           # wall time of one kernel call: Python regains control at least every ~0.2 s
+CHUNK_WALL_S = 0.05          # target wall time of one kernel call: Python regains control well within 0.2 s
 CHUNK_FIRST_STEPS = 20       # first chunk (calibrates the steps per CHUNK_WALL_S)
 
 

@@ -211,5 +211,13 @@ def test_a_signal_handler_acts_within_a_second_during_a_long_simulation():
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
         signal.signal(signal.SIGALRM, old)
-    # Python runs the handler when the kernel returns (chunks of ~CHUNK_WALL_S = 0.1 s)
+    # Python runs the handler when the kernel returns (chunks of ~dynamics.model.CHUNK_WALL_S)
     assert 0.0 <= fired[0] - t_due < 1.0
+
+
+def test_the_one_search_interpolation_of_a_law_table_is_np_interp_of_both_columns():
+    law = np.column_stack([np.linspace(0.0, 180.0, 19), np.linspace(1e9, 3e9, 19) ** 1.1, np.linspace(1.1, 1.4, 19)])
+    for x in np.concatenate([[-5.0, 0.0, 180.0, 200.0], np.random.default_rng(0).uniform(0.0, 180.0, 50)]):
+        k, n = base.interp2(x, law)
+        assert k == pytest.approx(np.interp(x, law[:, 0], law[:, 1]), rel=1e-14)
+        assert n == pytest.approx(np.interp(x, law[:, 0], law[:, 2]), rel=1e-14)

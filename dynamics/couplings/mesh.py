@@ -55,7 +55,7 @@ def params(case, stiffness, layout, slots) -> Params:
         out0=slots.output("mesh_force_N", (nc,)))
 
 
-@kernel
+@kernel(inline=True)
 def _double_contact(s, eps):
     """Smoothed double-contact indicator over one mesh pitch and its derivative d/ds."""
     f = eps - 1.0
@@ -69,14 +69,14 @@ def _double_contact(s, eps):
     return 0.5 * (1.0 - th), -0.5 * (1.0 - th * th) / MESH_EDGE * sg
 
 
-@kernel
+@kernel(inline=True)
 def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     """Coupling interface (see dynamics.couplings): forces into w.f, tangent into w.K, damping
     into w.C; returns (V, tau_in, ok) with this coupling's potential and input torque added."""
-    f, K, C = w.f, w.K, w.C
+    f, K, C, out, dof = w.f, w.K, w.C, w.out, p.dof
     rb1, rb2, z1, eps = p.rb_sun_m, p.rb_planet_m, p.z_sun, p.contact_ratio
-    for j in range(p.dof.shape[0]):
-        i0, ij = p.dof[j, 0], p.dof[j, 1]
+    for j in range(dof.shape[0]):
+        i0, ij = dof[j, 0], dof[j, 1]
         s = z1 * (th_in - q[i0]) / (2.0 * math.pi) + p.phase[j]
         h, dh = _double_contact(s, eps)
         km = p.k_mean_N_per_m * (1.0 + p.variation * (h - (eps - 1.0)))
@@ -92,7 +92,7 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
         f[ij] -= F * gj
         tau_in += F * rb1 - 0.5 * d * d * dks * ds0
         V += 0.5 * ks * d * d
-        w.out[p.out0 + j] = F
+        out[p.out0 + j] = F
         if want_k:
             K[i0, i0] += ks * g0 * g0
             K[i0, ij] += ks * g0 * gj

@@ -64,17 +64,19 @@ def params(case, stiffness, layout, slots) -> Params:
         dof=dof, out0=slots.output("bearing_force_N", (nd, nc, 2)))
 
 
-@kernel
+@kernel(inline=True)
 def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     """Coupling interface (see dynamics.couplings)."""
-    f, K, C = w.f, w.K, w.C
+    f, K, C, out, dof = w.f, w.K, w.C, w.out, p.dof
     kta, nta, cta = p.k_N_per_m_pow, p.n, p.clearance_m
-    nd, nc = p.dof.shape[0], p.dof.shape[1]
+    nd, nc = dof.shape[0], dof.shape[1]
     Gm = np.empty((2, 7))              # dD / dq over the seven DOFs of the pair
     gr = np.empty(7)
+    idx = np.empty(7, np.int64)
     for d in range(nd):
         for j in range(nc):
-            idx = p.dof[d, j]
+            for c in range(7):
+                idx[c] = dof[d, j, c]
             a, ecc, hr = p.seat_radius_m[j], p.ecc_m[d, j], p.hole_radius_m[j]
             pe = q[idx[1]] + p.ecc_phase_rad[d, j]
             ca, sa = math.cos(q[idx[0]] + p.seat_angle_rad[j]), math.sin(q[idx[0]] + p.seat_angle_rad[j])
@@ -91,8 +93,8 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             ex, ey = Dx / r, Dy / r
             x = r - cta
             o = p.out0 + 2 * (d * nc + j)
-            w.out[o] = 0.0
-            w.out[o + 1] = 0.0
+            out[o] = 0.0
+            out[o + 1] = 0.0
             if x <= 0.0:
                 continue
             F = kta * x ** nta
@@ -110,8 +112,8 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             Fy = F * ey + rb * (kt * rd * ey + fr * (Ddy - rd * ey))
             for c in range(7):
                 f[idx[c]] -= Fx * Gm[0, c] + Fy * Gm[1, c]
-            w.out[o] = Fx
-            w.out[o + 1] = Fy
+            out[o] = Fx
+            out[o + 1] = Fy
             V += kta * x ** (nta + 1.0) / (nta + 1.0)
             if want_k:
                 for c1 in range(7):

@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dynamics.couplings.base import foot_point, interp, kernel, ramp
+from dynamics.couplings.base import foot_point, interp2, kernel, ramp
 
 NAME = "pin"
 GAP_LIMIT_M = 1e-3     # a foot point farther than this from the pin-centre curve is lost geometry
@@ -58,42 +58,41 @@ def params(case, stiffness, layout, slots) -> Params:
         c0=slots.contacts("pin", (nd, zp), group=np.repeat(np.arange(nd), zp)))
 
 
-@kernel
+@kernel(inline=True)
 def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     """Coupling interface (see dynamics.couplings); only the contacts with w.active are
     evaluated (the others are known open: force 0, gap left as it was)."""
-    f, K, C = w.f, w.K, w.C
+    f, K, C, active, gaps, forces = w.f, w.K, w.C, w.active, w.gap, w.force
     R, Rr, E, zp = p.R_m, p.Rr_m, p.E_m, p.zp
-    law = p.law
-    npin = p.pins.shape[0]
+    law, pins, dof = p.law, p.pins, p.dof
+    npin = pins.shape[0]
     ok = True
-    for d in range(p.dof.shape[0]):
-        ix, iy, ia = p.dof[d, 0], p.dof[d, 1], p.dof[d, 2]
+    for d in range(dof.shape[0]):
+        ix, iy, ia = dof[d, 0], dof[d, 1], dof[d, 2]
         cx, cy, al = q[ix], q[iy], q[ia] + p.disc_rotation_rad[d]
         ca, sa = math.cos(al), math.sin(al)
         psi = math.atan2(cy, cx)
         for k in range(npin):
             c = p.c0 + d * npin + k
-            if not w.active[c]:
-                w.force[c] = 0.0
+            if not active[c]:
+                forces[c] = 0.0
                 continue
-            Px, Py, rp, thk = p.pins[k, 0], p.pins[k, 1], p.pins[k, 2], p.pins[k, 3]
+            Px, Py, rp, thk = pins[k, 0], pins[k, 1], pins[k, 2], pins[k, 3]
             wx, wy = Px - cx, Py - cy
             pbx, pby = ca * wx + sa * wy, -sa * wx + ca * wy
             t, s, nx, ny, kappa, okk = foot_point(pbx, pby, R, E, zp, al - thk)
             if not okk or abs(s) > GAP_LIMIT_M:
                 ok = False
             gap = s + Rr - rp
-            w.gap[c] = gap
-            w.force[c] = 0.0
+            gaps[c] = gap
+            forces[c] = 0.0
             if gap >= 0.0:
                 continue
             ngx, ngy = ca * nx - sa * ny, sa * nx + ca * ny
             g_x, g_y, g_a = -ngx, -ngy, -(wx * ngy - wy * ngx)
             ph = (thk - psi) * 180.0 / math.pi
             ph = abs(ph - 360.0 * math.floor((ph + 180.0) / 360.0))
-            kk = interp(ph, law[:, 0], law[:, 1])
-            nn = interp(ph, law[:, 0], law[:, 2])
+            kk, nn = interp2(ph, law)
             app = -gap
             F = kk * app ** nn
             kt = nn * kk * max(app, 1e-10) ** (nn - 1.0)
@@ -102,16 +101,16 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             Ft = F - beta * rmp * kt * gd
             if Ft < 0.0:
                 Ft = 0.0
-            w.force[c] = Ft
+            forces[c] = Ft
             f[ix] += Ft * g_x
             f[iy] += Ft * g_y
             f[ia] += Ft * g_a
             V += kk * app ** (nn + 1.0) / (nn + 1.0)
             if want_k:
-                gg = (g_x, g_y, g_a)
+                gg, ii = (g_x, g_y, g_a), (ix, iy, ia)
                 for c1 in range(3):
                     for c2 in range(3):
-                        K[p.dof[d, c1], p.dof[d, c2]] += kt * gg[c1] * gg[c2]
+                        K[ii[c1], ii[c2]] += kt * gg[c1] * gg[c2]
                         if Ft > 0.0:
-                            C[p.dof[d, c1], p.dof[d, c2]] += beta * rmp * kt * gg[c1] * gg[c2]
+                            C[ii[c1], ii[c2]] += beta * rmp * kt * gg[c1] * gg[c2]
     return V, tau_in, ok

@@ -32,13 +32,13 @@ def params(case, stiffness, layout, slots) -> Params:
         dof=np.column_stack([axis.indices("x"), axis.indices("y")]).astype(np.int64))
 
 
-@kernel
+@kernel(inline=True)
 def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     """Coupling interface (see dynamics.couplings)."""
-    f, K, C = w.f, w.K, w.C
+    f, K, C, dof = w.f, w.K, w.C, p.dof
     ksup, csup = p.k_N_per_m, p.clearance_m
-    for j in range(p.dof.shape[0]):
-        ix, iy = p.dof[j, 0], p.dof[j, 1]
+    for j in range(dof.shape[0]):
+        ix, iy = dof[j, 0], dof[j, 1]
         ux, uy = q[ix], q[iy]
         r = math.sqrt(ux * ux + uy * uy)
         if csup <= 0.0:
