@@ -6,9 +6,9 @@ A torque increment dT at the output gives dq = K^-1 e_out dT and the output rota
 dtheta = e_out . dq, so the complementary work splits exactly over the couplings:
     dT dtheta = dq^T K dq = sum_i dq^T K_i dq,     share_i = dq^T K_i dq / dq^T K dq,
 the shares sum to 1 by construction (no "stiffen one part 1000x" differences, which do not add
-up for a nonlinear, statically indeterminate path). A coupling that lumps several physical parts
-in series (e.g. the pin law = tooth contact + pin in its groove + disc body) splits its share by
-the parts' compliances at the operating force, which stiffness.json carries (`series_parts`).
+up for a nonlinear, statically indeterminate path). The shares are per coupling; a coupling that
+will lump several physical parts in series (issue 11) has to split its share by the parts'
+compliances at the operating force, which stiffness.json does not carry yet.
 """
 from __future__ import annotations
 
@@ -33,8 +33,7 @@ def coupling_tangents(model: ReducerModel, q: np.ndarray, input_rad: float) -> d
 
 def compliance_budget(model: ReducerModel, torque_Nm: float | None = None,
                       input_angle_deg: float = 0.0) -> dict:
-    """Shares of the output torsional compliance at `torque_Nm` (default rated), by coupling and,
-    where stiffness.json states them, by the physical parts in series inside a coupling."""
+    """Shares of the output torsional compliance at `torque_Nm` (default rated), by coupling."""
     T = model.case.rated_torque_Nm if torque_Nm is None else float(torque_Nm)
     st = solve_static(model, input_angle_deg, T)
     Ks = coupling_tangents(model, st.q, np.deg2rad(input_angle_deg))
@@ -44,15 +43,6 @@ def compliance_budget(model: ReducerModel, torque_Nm: float | None = None,
     dq = np.linalg.solve(K, e)
     total = float(dq @ K @ dq)
     shares = {name: float(dq @ Ki @ dq) / total for name, Ki in Ks.items()}
-    parts = {}
-    for name, share in shares.items():
-        split = model.stiffness.series_parts.get(name) if hasattr(model.stiffness, "series_parts") else None
-        if not split:
-            parts[name] = share
-            continue
-        c = np.array([float(v) for v in split.values()])
-        for part, ci in zip(split, c / c.sum()):
-            parts[f"{name}/{part}"] = share * float(ci)
     return {"torque_Nm": T, "input_angle_deg": float(input_angle_deg),
             "tangent_rigidity_Nm_per_arcmin": float(np.deg2rad(1 / 60) / dq[model.i_out]),
-            "by_coupling": shares, "compliance_budget": parts}
+            "compliance_budget": shares}

@@ -199,7 +199,6 @@ def cmd_hysteresis(args) -> int:
     write_json_atomic(out / "hysteresis.json", {"case": model.case.name, "stiffness": str(spath),
                                                 **res.summary(),
                                                 "compliance_budget": budget["compliance_budget"],
-                                                "compliance_budget_by_coupling": budget["by_coupling"],
                                                 "tangent_rigidity_at_rated_Nm_per_arcmin":
                                                     budget["tangent_rigidity_Nm_per_arcmin"],
                                                 "made_from": _made_from(model, "rv-hysteresis/1").to_json()})
