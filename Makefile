@@ -4,7 +4,7 @@
 #   make test                         the test suite (what CI runs)
 #   make bench                        benchmarks -> $(BUILD)/bench.json
 # `all`, `test` and `bench` create .venv and install the pinned dependencies when missing.
-# Stage graph per case:  geometry -> mesh -> fem -> {matrix, hysteresis, fourbar, tolerance, diagnosis} -> report
+# Stage graph per case:  geometry -> mesh -> fem -> {matrix, hysteresis, fourbar, tolerance, signatures, diagnosis} -> report
 
 PYTHON ?= python3
 VENV := .venv
@@ -27,8 +27,12 @@ RUN := $(PY) -m pipeline
 SCHED := $(if $(SCHEDULER),--scheduler $(SCHEDULER),)
 export MPLBACKEND := Agg
 export PYVISTA_OFF_SCREEN := true
+# one BLAS thread per process: the stages run their own worker processes (--workers), and small
+# dense solves with threaded BLAS on 2 busy cores ran 75-200x slower (measured in the FE map)
+export OPENBLAS_NUM_THREADS ?= 1
+export OMP_NUM_THREADS ?= 1
 
-.PHONY: all test bench clean install report FORCE $(addprefix stage-,geometry mesh fem matrix hysteresis fourbar tolerance diagnosis)
+.PHONY: all test bench clean install report FORCE $(addprefix stage-,geometry mesh fem matrix hysteresis fourbar tolerance signatures diagnosis)
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -107,6 +111,11 @@ stage-tolerance: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/tolerance/summary.json)
 $(BUILD)/%/tolerance/summary.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(SRC_tolerance) | $(STAMP)
 	$(RUN) tolerance --case $(CASE_FILE_$*) $(STIFF) --samples $(SAMPLES) --out $(BUILD)/$*/tolerance $(SCHED) $(Q)
 
+# The as-built error atlas: every error source alone at unit size through the quasi-static model.
+stage-signatures: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/signatures/signatures.json)
+$(BUILD)/%/signatures/signatures.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(SRC_signatures) | $(STAMP)
+	$(RUN) signatures --case $(CASE_FILE_$*) $(STIFF) --out $(BUILD)/$*/signatures $(Q)
+
 # Diagnosis runs where bench records exist for the case: the real RV-160N records (read in place,
 # never copied, and prerequisites: a changed record reruns it); the RV-40E cases have none shipped.
 RECORDS_rv160n-81 = $(wildcard $(MEASURED)/rv160n_*.csv)
@@ -119,7 +128,7 @@ $(BUILD)/%/diagnosis/paper001.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(S
 	$(RUN) paper001 --case $(CASE_FILE_$*) $(STIFF) --out $(BUILD)/$*/diagnosis $(Q)
 
 STAGES = geometry/profile.csv mesh/crankshaft_mesh.npz fem/stiffness.json matrix/te_std.csv hysteresis/hysteresis.json \
-         fourbar/comparison.md tolerance/summary.json
+         fourbar/comparison.md tolerance/summary.json signatures/signatures.json
 report: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/report/index.html)
 $(BUILD)/%/report/index.html: $(CASE_FP) $$(addprefix $(BUILD)/%/,$(STAGES)) \
         $$(if $$(RECORDS_$$*),$(BUILD)/%/diagnosis/diagnosis.json) \

@@ -37,5 +37,6 @@ def inertias(case) -> dict:
     r_f = cr.output_flange_radius_mm * mm
     m_carrier = rho * math.pi * r_f ** 2 * 2 * w
     j_out = m_carrier * r_f ** 2 / 2 + case.dynamics.load_inertia_kg_m2 + nc * m_crank * a ** 2
-    return {"carrier": [j_out], "crank_rotation": [j_crank], "crank_axis": [m_crank, m_crank],
+    # the crank's lateral mass lumped equally at its disc planes (crank_axis: one item per plane)
+    return {"carrier": [j_out], "crank_rotation": [j_crank], "crank_axis": [m_crank / nd, m_crank / nd],
             "disc": [m_disc, m_disc, j_disc]}

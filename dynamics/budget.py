@@ -1,4 +1,5 @@
-"""Compliance budget: each coupling's share of the output torsional compliance at a load.
+"""Compliance budget: each coupling's and each physical component's share of the output torsional
+compliance at a load.
 
 At a static equilibrium q* (input locked, output torque T) the tangent stiffness is the sum of the
 couplings' tangents, K = sum_i K_i (`dynamics.couplings`: every force comes from one coupling).
@@ -6,43 +7,182 @@ A torque increment dT at the output gives dq = K^-1 e_out dT and the output rota
 dtheta = e_out . dq, so the complementary work splits exactly over the couplings:
     dT dtheta = dq^T K dq = sum_i dq^T K_i dq,     share_i = dq^T K_i dq / dq^T K dq,
 the shares sum to 1 by construction (no "stiffen one part 1000x" differences, which do not add
-up for a nonlinear, statically indeterminate path). The shares are per coupling; a coupling that
-will lump several physical parts in series (issue 11) has to split its share by the parts'
-compliances at the operating force, which stiffness.json does not carry yet.
+up for a nonlinear, statically indeterminate path).
+
+By component (fem.stiffness.COMPONENTS): a coupling lumps physical parts in series, which carry
+the same force increment dF, so its energy splits over them as dF^T C_part dF, i.e. in proportion
+of their tangent compliances at the operating state:
+  mesh     per crank, involute_mesh 1/k_m(s) vs crank_torsion rb2^2/k_t (k_m at the crank's mesh phase);
+  support  dF = K_t du on the crank-axis DOFs (K_t the coupling's tangent there), part energies
+           dF^T C_part dF with C_part = fem.stiffness.support_compliance_parts (crank_bending,
+           support_bearings, carrier); a clearance's dead band only changes K_t;
+  needle   needle_bearings (the turning-arm FE law, all of it);
+  pin      per contact, its energy dq^T K_c dq split over pin_contact, disc_body, pin_groove by
+           fem.stiffness.pin_series_tangents at that contact's force (tooth-pair law at its phase).
+Each coupling's split is normalised, so the component shares also sum to 1 exactly.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from dynamics import couplings
+from dynamics.couplings import mesh as mesh_coupling
 from dynamics.reducer import ReducerModel
 from dynamics.statics import solve_static
+from fem.stiffness import COMPONENTS, pin_series_tangents, support_compliance_parts
 
 
 def coupling_tangents(model: ReducerModel, q: np.ndarray, input_rad: float) -> dict[str, np.ndarray]:
     """Tangent stiffness -df/dq of each registered coupling alone at state q."""
     out = {}
     for mod, p in zip(couplings.REGISTRY, model.arrays.couplings):
-        arrays = model.arrays._replace(couplings=(p,))
-        w = couplings.make_work(arrays, model.slots)
-        couplings.assemble(np.asarray(q, float), np.zeros(model.n_dof), float(input_rad), 0.0, 0.0, True,
-                           arrays, w)
+        w = _assemble_alone(model, p, q, input_rad)
         out[mod.NAME] = w.K.copy()
     return out
 
 
-def compliance_budget(model: ReducerModel, torque_Nm: float | None = None,
-                      input_angle_deg: float = 0.0) -> dict:
-    """Shares of the output torsional compliance at `torque_Nm` (default rated), by coupling."""
-    T = model.case.rated_torque_Nm if torque_Nm is None else float(torque_Nm)
-    st = solve_static(model, input_angle_deg, T)
-    Ks = coupling_tangents(model, st.q, np.deg2rad(input_angle_deg))
-    K = sum(Ks.values())
+def _assemble_alone(model: ReducerModel, p, q, input_rad: float, active=None):
+    """Work of one coupling (Params p) alone at rest at q; `active` masks the candidate contacts."""
+    arrays = model.arrays._replace(couplings=(p,))
+    w = couplings.make_work(arrays, model.slots)
+    if active is not None:
+        w.active[:] = active
+    couplings.assemble(np.asarray(q, float), np.zeros(model.n_dof), float(input_rad), 0.0, 0.0, True,
+                       arrays, w)
+    return w
+
+
+def energy_shares(Ks: dict[str, np.ndarray], dq: np.ndarray) -> dict[str, float]:
+    """share_i = dq^T K_i dq / dq^T (sum K) dq (the tangent complementary energy of each part)."""
+    e = {k: float(dq @ Ki @ dq) for k, Ki in Ks.items()}
+    total = sum(e.values())
+    return {k: v / total for k, v in e.items()}
+
+
+def normalised(weights: dict[str, float]) -> dict[str, float]:
+    """Fractions summing to 1 (all zero when nothing carries energy)."""
+    s = float(sum(weights.values()))
+    return {k: (float(v) / s if s > 0 else 0.0) for k, v in weights.items()}
+
+
+# ----------------------------------------------------------------------------- series splits
+# Each split returns the coupling's tangent energy dq^T K_i dq spread over its series parts
+# (component -> energy); compliance_budget normalises it to the coupling's share.
+
+def mesh_split(model: ReducerModel, q: np.ndarray, input_rad: float, dq: np.ndarray) -> dict[str, float]:
+    """Per crank j: energy k_s,j (g_j . dq)^2 (g the line-of-action gradient, input locked), split in
+    the series ratio 1/k_m(s_j) : rb2^2/k_t (dynamics.couplings.mesh)."""
+    p = couplings.params_of(model.arrays, "mesh")
+    rb1, rb2, eps = p.rb_sun_m, p.rb_planet_m, p.contact_ratio
+    c_tor = rb2 * rb2 / p.k_torsion_Nm_per_rad
+    w = {"involute_mesh": 0.0, "crank_torsion": 0.0}
+    for j in range(p.dof.shape[0]):
+        i0, ij = p.dof[j]
+        s = p.z_sun * (input_rad - q[i0]) / (2 * math.pi) + p.phase[j]
+        h, _ = mesh_coupling._double_contact(s, eps)
+        c_m = 1.0 / (p.k_mean_N_per_m * (1.0 + p.variation * (h - (eps - 1.0))))
+        energy = (rb2 * dq[ij] - (rb1 + rb2) * dq[i0]) ** 2 / (c_m + c_tor)
+        w["involute_mesh"] += energy * c_m / (c_m + c_tor)
+        w["crank_torsion"] += energy * c_tor / (c_m + c_tor)
+    return w
+
+
+def support_split(K_t: np.ndarray, du: np.ndarray, parts: dict[str, np.ndarray]) -> dict[str, float]:
+    """dF = K_t du through the parts in series (one force, added compliances): part energies
+    dF^T C_part dF (their sum is du^T K_t du when K_t = (sum C_part)^-1)."""
+    dF = K_t @ du
+    return {k: max(float(dF @ C @ dF), 0.0) for k, C in parts.items()}
+
+
+def _support_split(model: ReducerModel, q, input_rad, dq, K_support) -> dict[str, float]:
+    idx = np.asarray(couplings.params_of(model.arrays, "support").dof).reshape(-1)  # crank, plane, x/y
+    parts = support_compliance_parts(model.stiffness, model.n_crank)
+    return support_split(K_support[np.ix_(idx, idx)], dq[idx], parts)
+
+
+def pin_phase_deg(model: ReducerModel, q: np.ndarray) -> np.ndarray:
+    """(nd, zp) phase of each pin from its disc's line of centres, folded into [0, 180] deg
+    (as dynamics.couplings.pin does)."""
+    disc, zp = model.layout["disc"], model.case.cycloid.zp
+    psi = np.arctan2(q[disc.indices("y")], q[disc.indices("x")])
+    ph = np.rad2deg(2 * np.pi * np.arange(zp)[None, :] / zp - psi[:, None])
+    return np.abs(ph - 360.0 * np.floor((ph + 180.0) / 360.0))
+
+
+def pin_split(model: ReducerModel, q, input_rad, dq, K_pin=None) -> dict[str, float]:
+    """Per loaded contact c: its energy dq^T K_c dq (the pin kernel with only c active), split by
+    the series tangent compliances at its force, the tooth pair on the FE law at its phase."""
+    p = couplings.params_of(model.arrays, "pin")
+    off, _ = model.slots.contact_sets["pin"]
+    force = model.contacts(_assemble_alone(model, p, q, input_rad).force).reshape(-1)
+    pc = model.stiffness.pin_contact
+    pos = np.clip(pin_phase_deg(model, q).reshape(-1), pc.position_deg[0], pc.position_deg[-1])
+    k, n = np.interp(pos, pc.position_deg, pc.law_k_N_per_m_pow), np.interp(pos, pc.position_deg, pc.law_n)
+    w = {"pin_contact": 0.0, "disc_body": 0.0, "pin_groove": 0.0}
+    for c in np.flatnonzero(force > 0):
+        active = np.zeros(model.slots.n_contacts, np.bool_)
+        active[off + c] = True
+        energy = float(dq @ _assemble_alone(model, p, q, input_rad, active).K @ dq)
+        frac = normalised({kk: float(v[0]) for kk, v in
+                           pin_series_tangents(model.stiffness, force[c:c + 1], k[c], n[c]).items()})
+        for kk in w:
+            w[kk] += energy * frac[kk]
+    return w
+
+
+SPLITS = {  # coupling -> f(model, q, input_rad, dq, K_coupling) -> {component: energy}
+    "mesh": lambda m, q, th, dq, K: mesh_split(m, q, th, dq),
+    "support": _support_split,
+    "needle": lambda m, q, th, dq, K: {"needle_bearings": float(dq @ K @ dq)},
+    "pin": pin_split,
+}
+
+
+def tangent_state(model: ReducerModel, torque_Nm: float, input_angle_deg: float = 0.0):
+    """(q*, input angle [rad], coupling tangents, dq per unit output torque) at a static equilibrium."""
+    th = float(np.deg2rad(input_angle_deg))
+    q = solve_static(model, input_angle_deg, torque_Nm).q
+    Ks = coupling_tangents(model, q, th)
     e = np.zeros(model.n_dof)
     e[model.i_out] = 1.0
-    dq = np.linalg.solve(K, e)
-    total = float(dq @ K @ dq)
-    shares = {name: float(dq @ Ki @ dq) / total for name, Ki in Ks.items()}
+    return q, th, Ks, np.linalg.solve(sum(Ks.values()), e)
+
+
+def compliance_budget(model: ReducerModel, torque_Nm: float | None = None,
+                      input_angle_deg: float = 0.0) -> dict:
+    """Shares of the output torsional compliance at `torque_Nm` (default rated): by component
+    (`compliance_budget`, fem.stiffness.COMPONENTS order) and by coupling (`by_coupling`)."""
+    T = model.case.rated_torque_Nm if torque_Nm is None else float(torque_Nm)
+    q, th, Ks, dq = tangent_state(model, T, input_angle_deg)
+    by_coupling = energy_shares(Ks, dq)
+    missing = set(by_coupling) - set(SPLITS)
+    if missing:
+        raise KeyError(f"couplings {sorted(missing)} have no component split in dynamics.budget.SPLITS")
+    parts = dict.fromkeys(COMPONENTS, 0.0)
+    for name, share in by_coupling.items():
+        for comp, frac in normalised(SPLITS[name](model, q, th, dq, Ks[name])).items():
+            parts[comp] += share * frac
     return {"torque_Nm": T, "input_angle_deg": float(input_angle_deg),
             "tangent_rigidity_Nm_per_arcmin": float(np.deg2rad(1 / 60) / dq[model.i_out]),
-            "compliance_budget": shares}
+            "compliance_budget": parts, "by_coupling": by_coupling}
+
+
+def against_reference(rigidity_Nm_per_arcmin: float, reference_Nm_per_arcmin: float, shares: dict) -> dict:
+    """The prediction beside a reference rigidity (catalog or bench), and what it would take to meet
+    it: the factor on ONE component's compliance that alone closes the gap, to first order
+    (its compliance c_i = s_i C grows by C (K / K_ref - 1), so f_i = 1 + (K / K_ref - 1) / s_i). A
+    report of where the model could be wrong, not a correction: nothing here feeds the model."""
+    K, Kr = float(rigidity_Nm_per_arcmin), float(reference_Nm_per_arcmin)
+    if not Kr > 0:
+        return {}
+    gap = K / Kr - 1.0
+    need = {name: (1.0 + gap / s if s > 1e-9 else None) for name, s in
+            sorted(shares.items(), key=lambda kv: -kv[1])}
+    return {"reference_Nm_per_arcmin": Kr, "predicted_over_reference": K / Kr,
+            "compliance_factor_to_meet_reference": {k: v for k, v in need.items()
+                                                    if v is None or v > 0},
+            "note": "factor on one component's compliance that alone brings the rigidity to the "
+                    "reference (first order in the shares at rated torque); components that cannot "
+                    "do it alone (factor <= 0 or share ~ 0) are omitted or null"}

@@ -42,9 +42,14 @@ class HysteresisResult:
                                "+-3 % rated; backlash: loop width at zero torque; input locked"}
 
 
+# below 5 % of rated the Hertzian contacts and the pins closing their modification gaps bend the
+# curve most: sampled there too, so the curve is not a chord across its low-torque knee
+LOW_TORQUE_FRACTIONS = (ZERO_FRACTION, 0.005, 0.01, 0.02, 0.03)
+
+
 def _sweep(rated: float, n: int) -> np.ndarray:
     up = np.linspace(0.0, 1.0, n)
-    leg = np.unique(np.concatenate([up, [ZERO_FRACTION, 0.03, 0.5]]))
+    leg = np.unique(np.concatenate([up, LOW_TORQUE_FRACTIONS, [0.5]]))
     legs = [leg, leg[::-1][1:], -leg[1:], -leg[::-1][1:], leg[1:]]
     return rated * np.concatenate(legs)
 

@@ -8,6 +8,14 @@ the load torque acts). SI units throughout (m, rad, N, N m, kg, s).
 The time integration runs in chunks of steps (`integrate` from step a to step b) and resumes from
 the returned state (`RunState` plus the Work's candidate-contact mask), so Python regains control
 between chunks (signals, progress) and a chunked run is bit-identical to an unchunked one.
+
+Bounded angles: the mechanism repeats exactly when the input turns one period 2 pi i (the carrier
+one revolution; q changes by `shift`, `dynamics.statics._turn_shift`). The integration keeps the
+input within half a period of zero by removing whole periods from the state as it goes (counted in
+RunState.counts[2], added back to the recorded output angle), so every angle the couplings see
+stays bounded however long the run: an accumulated angle loses the precision of its trigonometry
+and of the pin foot-point Newton, whose 1e-14 rad test fails in 2e-4 of the calls at a parameter
+of 3-5 pi and in 9 % beyond 20 pi (issue 12 item 5: every run failed after ~3 output revolutions).
 """
 from __future__ import annotations
 
@@ -35,7 +43,9 @@ class RunState(NamedTuple):
     acc: np.ndarray
     fn: np.ndarray             # (n,) total force at the last step (HHT-alpha needs it)
     sums: np.ndarray           # (4,) potential energy, input torque, input work, load work
-    counts: np.ndarray         # (2,) int: Newton iterations, contacts missed by the candidate set
+    counts: np.ndarray         # (3,) int: Newton iterations, contacts missed by the candidate set,
+                               #   whole mechanism periods removed from q (see the module doc)
+    peak: np.ndarray           # (n_contacts,) largest contact force of the run so far [N]
 
 
 class Samples(NamedTuple):
@@ -161,6 +171,7 @@ def integrate_start(st, th0, w0, T0, beta, Mdiag, m, w):
     st.fn[m.i_out] -= T0
     st.acc[:] = st.fn / Mdiag
     st.sums[0], st.sums[1] = V, tau
+    st.peak[:] = w.force
     return ok
 
 
@@ -181,8 +192,8 @@ def _refresh_candidates(q, v, th, w_in, beta, m, w):
 
 
 @kernel(inline=True)
-def _record(si, q, v, V, tau, win, wload, Mdiag, m, w, out, store_force):
-    out.q_out[si] = q[m.i_out]
+def _record(si, q, v, V, tau, win, wload, Mdiag, m, w, out, store_force, q_out_offset):
+    out.q_out[si] = q[m.i_out] + q_out_offset
     out.tau_in[si] = tau
     teeth, force, group = out.teeth, w.force, m.contact_group
     teeth[si, :] = 0
@@ -199,11 +210,12 @@ def _record(si, q, v, V, tau, win, wload, Mdiag, m, w, out, store_force):
 
 
 @kernel(inline=True)
-def _advance(q, v, acc, fn, step, th_arr, w_arr, T_arr, dt, alpha, beta, m, w, scale, max_iter, tol_m,
-             Mdiag, J):
-    """Step `step` (th_arr[step - 1] -> th_arr[step]); a step whose Newton iteration does not
-    converge (contact onset inside the step) is retried as 2, 4, ... sub-steps (input and load
-    interpolated linearly inside the step). Returns (q, v, acc, fn, V, tau, iterations, ok)."""
+def _advance(q, v, acc, fn, step, th_arr, th_off, w_arr, T_arr, dt, alpha, beta, m, w, scale, max_iter,
+             tol_m, Mdiag, J):
+    """Step `step` (th_arr[step - 1] -> th_arr[step], less th_off: the periods removed from q); a
+    step whose Newton iteration does not converge (contact onset inside the step) is retried as 2,
+    4, ... sub-steps (input and load interpolated linearly inside the step). Returns (q, v, acc,
+    fn, V, tau, iterations, ok)."""
     V, tau, its_all = 0.0, 0.0, 0
     for level in range(SUBSTEP_LEVELS):
         nsub = 1 << level
@@ -211,7 +223,7 @@ def _advance(q, v, acc, fn, step, th_arr, w_arr, T_arr, dt, alpha, beta, m, w, s
         good = True
         for sub in range(nsub):
             s1 = (sub + 1.0) / nsub
-            th1 = th_arr[step - 1] + s1 * (th_arr[step] - th_arr[step - 1])
+            th1 = (th_arr[step - 1] - th_off) + s1 * (th_arr[step] - th_arr[step - 1])
             w1 = w_arr[step - 1] + s1 * (w_arr[step] - w_arr[step - 1])
             T1 = T_arr[step - 1] + s1 * (T_arr[step] - T_arr[step - 1])
             qs, vs, as_, fs, its, okk, V, tau = _hht_step(
@@ -228,26 +240,42 @@ def _advance(q, v, acc, fn, step, th_arr, w_arr, T_arr, dt, alpha, beta, m, w, s
 
 @kernel
 def integrate(st, step_from, step_to, th_arr, w_arr, T_arr, dt, stride, alpha, beta, m, w, scale,
-              max_iter, tol_m, Mdiag, out, store_force):
+              max_iter, tol_m, Mdiag, out, store_force, shift, period):
     """HHT-alpha (alpha in [0, 1/3]; 0 = trapezoidal rule) with a full Newton per step, steps
     step_from .. step_to - 1 of a run whose step n goes from th_arr[n - 1] to th_arr[n] (step 0:
     the start, recorded only; `integrate_start` first). Samples every `stride` steps into `out`.
     Only candidate contacts enter the Newton iterations (see CANDIDATE_MARGIN_M), refreshed every
     CANDIDATE_REFRESH steps; st.counts[1] counts contacts found closed at a refresh that had been
     skipped (a margin too small: expected 0). st is updated to the last converged step.
+    Whole mechanism periods (input `period` [rad], state `shift`; period 0: none) are removed from
+    q whenever the input leaves (-period / 2, period / 2] (module doc); st.counts[2] counts them,
+    st.q is the reduced state. st.peak keeps each contact's largest force.
     Returns (last step done, status 0 = done, 1 = Newton failed at the step after it)."""
     n = st.q.shape[0]
     q, v, acc, fn = st.q.copy(), st.v.copy(), st.acc.copy(), st.fn.copy()
     V, tau, win, wload = st.sums[0], st.sums[1], st.sums[2], st.sums[3]
+    turns = st.counts[2]
+    peak = st.peak
     J = np.zeros((n, n))
     status, last = 0, step_to - 1
     for step in range(step_from, step_to):
+        if period > 0.0:
+            rel = th_arr[step] - turns * period
+            while rel > 0.5 * period:
+                q = q - shift
+                turns += 1
+                rel -= period
+            while rel <= -0.5 * period:
+                q = q + shift
+                turns -= 1
+                rel += period
+        th_off = turns * period
         if step > 0 and step % CANDIDATE_REFRESH == 0:
-            st.counts[1] += _refresh_candidates(q, v, th_arr[step - 1], w_arr[step - 1], beta, m, w)
+            st.counts[1] += _refresh_candidates(q, v, th_arr[step - 1] - th_off, w_arr[step - 1], beta, m, w)
         if step > 0:
             p_in0 = tau * w_arr[step - 1]
             p_ld0 = -T_arr[step - 1] * v[m.i_out]
-            q, v, acc, fn, V, tau, its, done = _advance(q, v, acc, fn, step, th_arr, w_arr, T_arr, dt,
+            q, v, acc, fn, V, tau, its, done = _advance(q, v, acc, fn, step, th_arr, th_off, w_arr, T_arr, dt,
                                                         alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J)
             st.counts[0] += its
             if not done:
@@ -255,8 +283,14 @@ def integrate(st, step_from, step_to, th_arr, w_arr, T_arr, dt, stride, alpha, b
                 break
             win += 0.5 * dt * (p_in0 + tau * w_arr[step])
             wload += 0.5 * dt * (p_ld0 - T_arr[step] * v[m.i_out])
+            force = w.force
+            for c in range(force.shape[0]):
+                if force[c] > peak[c]:
+                    peak[c] = force[c]
         if step % stride == 0:
-            _record(step // stride, q, v, V, tau, win, wload, Mdiag, m, w, out, store_force)
+            _record(step // stride, q, v, V, tau, win, wload, Mdiag, m, w, out, store_force,
+                    turns * shift[m.i_out])
+    st.counts[2] = turns
     st.q[:], st.v[:], st.acc[:], st.fn[:] = q, v, acc, fn
     st.sums[0], st.sums[1], st.sums[2], st.sums[3] = V, tau, win, wload
     return last, status

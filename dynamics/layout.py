@@ -6,10 +6,13 @@ item. Couplings turn the layout into their own index tables when they are built
 only see vectors of length n: a later model adds a block (e.g. the crank axis displacement per
 disc plane) here and in the couplings that attach to it, not in the solvers.
 
-Standard layout (n = 1 + 3 nc + 3 nd; the order of the original model, kept so results match):
+Standard layout (n = 1 + nc + 2 nc nd + 3 nd):
   carrier         1 x (rot)         output rotation [rad]; the load torque acts here
   crank_rotation  nc x (rot)        crank angle = eccentric angle of disc 1 in the ground frame [rad]
-  crank_axis      nc x (x, y)       crank axis displacement from its carrier seat, ground frame [m]
+  crank_axis      nc nd x (x, y)    crank j's axis displacement at disc plane d (item j nd + d) from
+                                    its unloaded position, CARRIER frame [m]: the support path
+                                    (bearings, crank bending, carrier racking) is a stiffness matrix
+                                    of the carrier, so it is written where that matrix is constant
   disc            nd x (x, y, rot)  disc centre [m] and rotation [rad]
 """
 from __future__ import annotations
@@ -27,6 +30,7 @@ class Block:
     components: tuple          # DOF names of one item
     rotational: tuple          # per component: True for an angle [rad], False for a length [m]
     item_label: str = ""       # label prefix of item i: f"{item_label}{i + 1}"; "" for one body
+    names: tuple = ()          # per item, overrides the item label (e.g. "crank1_plane2")
 
     @property
     def width(self) -> int:
@@ -52,6 +56,8 @@ class Block:
         return np.array([self.index(i, component) for i in range(self.count)], dtype=np.int64)
 
     def labels(self) -> tuple:
+        if self.names:
+            return tuple(f"{self.names[i]}_{c}" for i in range(self.count) for c in self.components)
         if not self.item_label:           # a single body: the block name (with the component if several)
             return (self.name,) if self.size == 1 else tuple(f"{self.name}_{c}" for c in self.components)
         return tuple(f"{self.item_label}{i + 1}_{c}" for i in range(self.count) for c in self.components)
@@ -63,10 +69,11 @@ class DofLayout:
 
     @classmethod
     def build(cls, spec) -> DofLayout:
-        """From (name, count, components, rotational, item_label) tuples, in storage order."""
+        """From (name, count, components, rotational, item_label[, names]) tuples, in storage order."""
         blocks, start = [], 0
-        for name, count, comps, rot, label in spec:
-            blocks.append(Block(name, start, count, tuple(comps), tuple(rot), label))
+        for name, count, comps, rot, label, *names in spec:
+            blocks.append(Block(name, start, count, tuple(comps), tuple(rot), label,
+                                tuple(names[0]) if names else ()))
             start += blocks[-1].size
         return cls(tuple(blocks))
 
@@ -74,7 +81,8 @@ class DofLayout:
     def standard(cls, n_crank: int, n_disc: int) -> DofLayout:
         return cls.build([("carrier", 1, ("rot",), (True,), ""),
                           ("crank_rotation", n_crank, ("rot",), (True,), "crank"),
-                          ("crank_axis", n_crank, ("x", "y"), (False, False), "crank"),
+                          ("crank_axis", n_crank * n_disc, ("x", "y"), (False, False), "crank",
+                           [f"crank{j + 1}_plane{d + 1}" for j in range(n_crank) for d in range(n_disc)]),
                           ("disc", n_disc, ("x", "y", "rot"), (False, False, True), "disc")])
 
     def __getitem__(self, name: str) -> Block:

@@ -76,6 +76,11 @@ class LoadSpec:
     def __str__(self) -> str:
         return f"{self.form}:{self.torque_Nm:g}"
 
+    @property
+    def peak_torque_Nm(self) -> float:
+        """Largest |torque| of the form: T for constant, 1.05 T for square and sine (+-5 % of T)."""
+        return abs(self.torque_Nm) * (1.0 if self.form == "constant" else 1.05)
+
 
 def load_torque_Nm(spec: LoadSpec, t):
     """Output load torque [N m] of paper 001 at time t [s] (resisting forward rotation)."""

@@ -168,3 +168,62 @@ def sigma_table(results: list[dict], key: str = "sigma_arcsec") -> np.ndarray:
     for r in results:
         tab[TORQUES_NM.index(r["torque_Nm"]), FORMS.index(r["form"])] = r[key]
     return tab
+
+
+# ---------------------------------------------------------------- paper 001's TE definition
+
+PAPER_001_STEP_S = 0.01    # 700 output steps over 7 s (100 Hz)
+
+
+def paper001_te(t_s, input_angle_deg, output_angle_deg, ratio: float, step_s: float = PAPER_001_STEP_S):
+    """Paper 001's TE on our run: dphi(t_k) = (omega_out - omega_in / i)(t_k) * dt at its output steps
+    t_k = k dt (k = 1, 2, ...), speeds at those instants (central differences of our record, which
+    scale a line at f by sin(2 pi f h) / (2 pi f h), h its spacing: 0.77 at 385 Hz, h = 0.5 ms).
+    Returns (t_k, per-step dphi [arcsec], its running sum [arcsec]): the formula as printed is the
+    per-step figure; summed it would be theta_out - theta_in / i sampled at 100 Hz."""
+    t = np.asarray(t_s, float)
+    w_out, w_in = np.gradient(np.asarray(output_angle_deg, float), t), np.gradient(np.asarray(input_angle_deg, float), t)
+    tk = np.arange(1, int(np.floor(t[-1] / step_s + 1e-9)) + 1) * step_s
+    step = (np.interp(tk, t, w_out) - np.interp(tk, t, w_in) / ratio) * step_s * 3600.0
+    return tk, step, np.cumsum(step)
+
+
+def last_rev_window(t_k, t_s, output_angle_deg) -> np.ndarray:
+    """Mask of the samples t_k inside the last full output revolution of the record."""
+    out = np.asarray(output_angle_deg, float)
+    travel = np.abs(out - out[-1])
+    if travel.max() < 360.0:
+        return np.zeros(len(t_k), bool)
+    return np.asarray(t_k) >= t_s[np.flatnonzero(travel >= 360.0)[-1]]
+
+
+def paper001_sigmas(npz_path, ratio: float) -> dict:
+    """sigma [arcsec] of one matrix cell, last output revolution: ours (theta_out - theta_in / i on the
+    record), paper 001's per-step dphi at 100 Hz, and its running sum at 100 Hz."""
+    with np.load(npz_path, allow_pickle=False) as d:
+        t, th_in, th_out, te = d["t_s"], d["input_angle_deg"], d["output_angle_deg"], d["te_arcsec"]
+    tk, step, summed = paper001_te(t, th_in, th_out, ratio)
+    last = last_rev_window(tk, t, th_out)
+    ours = last_rev_window(t, t, th_out)
+    nan = float("nan")
+    return {"ours_theta_last_rev": float(np.std(te[ours])) if ours.any() else nan,
+            "paper_step_last_rev": float(np.std(step[last])) if last.any() else nan,
+            "paper_summed_last_rev": float(np.std(summed[last])) if last.any() else nan,
+            "output_rev_per_s": float(np.median(np.gradient(th_out, t)[t >= STEADY_FROM_S]) / 360.0)
+            if (t >= STEADY_FROM_S).any() else nan}
+
+
+def aliasing(case, output_rev_per_s: float, step_s: float = PAPER_001_STEP_S) -> list[dict]:
+    """Where each characteristic order shows up when sampled at 1 / step_s, and how paper 001's
+    speed-based dphi weighs a TE line of that order: amplitude x 2 pi f dt per step (a derivative),
+    and x ~ f / f_apparent once summed (the sum integrates the aliased line)."""
+    fs = 1.0 / step_s
+    rows = []
+    for name, k in characteristic_orders(case).items():
+        f = k * output_rev_per_s
+        fa = abs(f - fs * round(f / fs))
+        rows.append({"mechanism": name, "order": k, "frequency_Hz": f, "apparent_Hz": fa,
+                     "apparent_order": fa / output_rev_per_s if output_rev_per_s > 0 else float("nan"),
+                     "step_gain": 2 * np.pi * f * step_s,
+                     "summed_gain": (2 * np.pi * f * step_s) / (2 * np.sin(np.pi * fa * step_s)) if fa > 0 else float("inf")})
+    return rows

@@ -47,7 +47,13 @@ dt < 1e-5 s; the time-step study is in tests/test_dynamics_verification.py. Only
 (gap < kernels.CANDIDATE_MARGIN_M at the last refresh, every CANDIDATE_REFRESH steps) enter the
 Newton iterations; a skipped pin found closed raises DynamicsError (never silently wrong). The
 kernel runs in chunks of ~CHUNK_WALL_S of wall time, so signal handlers (Ctrl-C, SIGTERM) act
-between chunks; chunking does not change a single bit of the result.
+between chunks; chunking does not change a single bit of the result. Runs of any length: the
+kernel removes whole mechanism periods from the state as the input turns (`dynamics.kernels`), so
+no angle the couplings see grows with the run.
+Load range: the FE tables end at the catalog momentary torque (fem.reduce), so `simulate` refuses
+a load form whose peak exceeds case.operation.momentary_torque_Nm, and a run whose largest pin
+force left the FE pin-contact table (a dynamic overshoot) ends with that reason, not a result
+from an extrapolated law.
 Statics: `solve_static` (robust strategy and the zero-load convention in `dynamics.statics`).
 """
 from __future__ import annotations
@@ -62,13 +68,13 @@ from dynamics import kernels as kn
 from dynamics.loads import LoadSpec, input_angle_deg, input_speed_deg_s, load_torque_Nm
 from dynamics.reducer import ROT_SCALE_M, DynamicsError, ReducerModel, build_model, evaluate
 from dynamics.results import TEResult
-from dynamics.statics import (STATIC_TOL_N, ZERO_LOAD_FRACTION, _static, check_direction, damping_beta_s,
-                              eigenfrequencies_Hz, kinematic_q, linearise, nominal_q, quasi_static,
-                              solve_static, te_result)
+from dynamics.statics import (STATIC_TOL_N, ZERO_LOAD_FRACTION, _static, _turn_shift, check_direction,
+                              damping_beta_s, eigenfrequencies_Hz, kinematic_q, linearise, nominal_q,
+                              quasi_static, solve_static, te_result)
 
-__all__ = ["DynamicsError", "ReducerModel", "build_model", "evaluate", "simulate", "solve_static",
-           "quasi_static", "linearise", "eigenfrequencies_Hz", "damping_beta_s", "kinematic_q", "nominal_q",
-           "ROT_SCALE_M", "STATIC_TOL_N", "ZERO_LOAD_FRACTION"]
+__all__ = ["DynamicsError", "ReducerModel", "build_model", "evaluate", "simulate", "check_load_range",
+           "solve_static", "quasi_static", "linearise", "eigenfrequencies_Hz", "damping_beta_s", "kinematic_q",
+           "nominal_q", "ROT_SCALE_M", "STATIC_TOL_N", "ZERO_LOAD_FRACTION"]
 
 DEFAULT_SPEED_RPM = 1200.0   # DESIGN.md: paper 001's 7200 deg/s is the simulate default
 DEFAULT_DT_S = 1e-4
@@ -99,6 +105,16 @@ class Run:
         """Contacts found closed at a candidate refresh that had been skipped (expected 0)."""
         return int(self.state.counts[1])
 
+    @property
+    def turns(self) -> int:
+        """Whole mechanism periods removed from state.q (state.q + turns * shift is the absolute state)."""
+        return int(self.state.counts[2])
+
+    @property
+    def peak_force_N(self) -> np.ndarray:
+        """Largest force of each contact over the run (the Work's contact order)."""
+        return self.state.peak
+
 
 def _next_chunk(steps: int, wall_s: float, target_s: float) -> int:
     """Steps for the next chunk: scaled to the target wall time, at most doubling."""
@@ -112,13 +128,16 @@ def run_dynamics(model: ReducerModel, q0, v0, th, w, T, dt: float, stride: int, 
                  chunk_steps: int | None = None, chunk_wall_s: float = CHUNK_WALL_S) -> Run:
     """HHT-alpha from (q0, v0) along the prescribed input th, w [rad, rad/s] and load T [N m]
     (step n: th[n - 1] -> th[n]), sampled every `stride` steps. The kernel runs in chunks of
-    `chunk_steps` steps, or (default) of ~chunk_wall_s of wall time, resuming from its state."""
+    `chunk_steps` steps, or (default) of ~chunk_wall_s of wall time, resuming from its state.
+    Whole mechanism periods are removed from the state as the input turns (samples carry the
+    absolute output angle; state.q is reduced by Run.turns periods)."""
     nsteps = len(th) - 1
     ns = nsteps // stride + 1
     n, m, mass = model.n_dof, model.arrays, model.mass
-    st = kn.RunState(q=np.array(q0, float), v=np.array(v0, float), acc=np.zeros(n), fn=np.zeros(n),
-                     sums=np.zeros(4), counts=np.zeros(2, np.int64))
     nc = len(m.contact_group)
+    st = kn.RunState(q=np.array(q0, float), v=np.array(v0, float), acc=np.zeros(n), fn=np.zeros(n),
+                     sums=np.zeros(4), counts=np.zeros(3, np.int64), peak=np.zeros(nc))
+    shift, period = _turn_shift(model), 2.0 * math.pi * model.ratio
     out = kn.Samples(q_out=np.zeros(ns), teeth=np.zeros((ns, m.n_groups), np.int64),
                      force=np.zeros((ns if store_forces else 1, nc)), tau_in=np.zeros(ns), energy=np.zeros((ns, 4)))
     wk = model.work()
@@ -129,7 +148,7 @@ def run_dynamics(model: ReducerModel, q0, v0, th, w, T, dt: float, stride: int, 
         end = min(nsteps + 1, step + chunk)
         t0 = time.perf_counter()
         last, status = kn.integrate(st, step, end, th, w, T, dt, stride, alpha, beta, m, wk, model.scale,
-                                    max_iter, tol_m, mass, out, store_forces)
+                                    max_iter, tol_m, mass, out, store_forces, shift, period)
         wall = time.perf_counter() - t0
         chunks, longest = chunks + 1, max(longest, wall)
         if status != 0:
@@ -138,6 +157,17 @@ def run_dynamics(model: ReducerModel, q0, v0, th, w, T, dt: float, stride: int, 
         if chunk_steps is None:
             chunk = _next_chunk(chunk, wall, chunk_wall_s)
     return Run(out, st, status, last, chunks, longest)
+
+
+def check_load_range(model: ReducerModel, load: LoadSpec) -> None:
+    """Refuse a load form whose peak exceeds the case's momentary maximum torque: the reducer is not
+    rated beyond it and the FE stiffness tables end there (fem.reduce). Cheap: no solve."""
+    limit = model.case.operation.momentary_torque_Nm
+    if load.peak_torque_Nm > limit:
+        raise DynamicsError(f"load {load}: peak output torque {load.peak_torque_Nm:.6g} N m exceeds the case's "
+                            f"momentary maximum {limit:g} N m ([operation] momentary_torque_Nm, "
+                            f"{load.peak_torque_Nm / model.case.rated_torque_Nm:.3g}x rated): the reducer is not "
+                            f"rated for it and the FE stiffness tables end there; allowed peak <= {limit:g} N m")
 
 
 def simulate(model: ReducerModel, load: LoadSpec, *, duration_s: float = 7.0,
@@ -150,6 +180,7 @@ def simulate(model: ReducerModel, load: LoadSpec, *, duration_s: float = 7.0,
     defaults to DESIGN.md's 1200 rpm; direction -1 runs backward (record torque negative).
     Energy bookkeeping (kinetic, potential, input work, load work) lands in meta when asked."""
     check_direction(direction)
+    check_load_range(model, load)
     speed = DEFAULT_SPEED_RPM if input_speed_rpm is None else float(input_speed_rpm)
     dt = DEFAULT_DT_S if dt_s is None else float(dt_s)
     sdt = DEFAULT_SAMPLE_DT_S if sample_dt_s is None else float(sample_dt_s)
@@ -169,17 +200,26 @@ def simulate(model: ReducerModel, load: LoadSpec, *, duration_s: float = 7.0,
     q, _ = _static(model, th[0], T[0], None, direction)
     run = run_dynamics(model, q, np.zeros_like(q), th, w, T, dt, stride, hht_alpha, beta,
                        store_forces=store_pin_forces)
+    pin_peak = float(model.contacts(run.peak_force_N).max(initial=0.0))
+    table = float(np.max(model.stiffness.pin_contact.load_N))
     if run.status != 0:
-        raise DynamicsError(f"simulate diverged at t = {run.last_step * dt:.5g} s (Newton did not converge) "
-                            f"for load {load}, dt = {dt:g} s: reduce --dt or check the stiffness laws")
+        raise DynamicsError(f"simulate diverged at t = {run.last_step * dt:.5g} s for load {load}: the step did "
+                            f"not converge in {2 ** (kn.SUBSTEP_LEVELS - 1)} sub-steps of dt = {dt:g} s (largest "
+                            f"pin force so far {pin_peak:.4g} N, FE table to {table:.4g} N); a smaller --dt helps "
+                            f"only where contacts change faster than dt resolves")
     if run.missed:
         raise DynamicsError(f"simulate: {run.missed} pin contacts closed while skipped as open (candidate "
                             f"margin {kn.CANDIDATE_MARGIN_M * 1e6:g} um too small for load {load}); "
                             f"reduce --dt")
+    if pin_peak > table:
+        raise DynamicsError(f"simulate: load {load} drove a pin force of {pin_peak:.4g} N, beyond the FE "
+                            f"pin-contact table (to {table:.4g} N): the result would rest on an extrapolated "
+                            f"contact law; lower the torque or widen the FEM stage's load range")
     s = run.samples
     idx = np.arange(len(s.q_out)) * stride
     meta = {"load": str(load), "dt_s": dt, "sample_dt_s": dt * stride,
             "newton_per_step": run.newton_iterations / max(nsteps, 1), "missed_contacts": run.missed,
+            "peak_pin_force_N": pin_peak, "pin_table_max_N": table,
             "input_speed_rpm": speed, "direction": direction, "solver": f"HHT-alpha {hht_alpha}",
             "damping_beta_s": beta, "input_torque_Nm": s.tau_in,
             "kernel_calls": run.chunks, "max_kernel_call_s": run.max_chunk_wall_s}

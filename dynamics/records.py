@@ -6,12 +6,17 @@ Header `time_s,input_angle_deg,output_angle_deg,output_torque_Nm`, unwrapped enc
 first, more columns allowed after the four.
 
 Loader (`read_record`): checks every row and names the file and the 1-based line of the problem
-(missing column, non-numeric or non-finite value, non-increasing time, wrapped angle, shorter than
-one output revolution). Other column names or headerless files are read only through an explicit
-column map: nothing is guessed. The conditions the diagnosis simulates (input speed, torque,
-direction) are read from the record's own samples, not from its comments; comments are kept
-(they carry notes such as `# encoder_zero: <id>`). A path that is no readable UTF-8 text file (a
-folder, no permission, binary or other-encoding content) is refused in one line naming the file.
+(missing column, non-numeric or non-finite value, non-increasing time, wrapped angle, a jump across
+a time gap larger than the speed explains, a reversal of the motion, shorter than one output
+revolution). Samples need not be uniform in time: a gap moves the angles by speed x gap and is no
+wrap. `read_records` splits a file whose motion reverses (forward then backward) into one record per
+direction. Rows are parsed by numpy's C reader (2 million rows in seconds); a row it cannot read
+is then found and named by the row-by-row reader. Other column names or headerless files are read
+only through an explicit column map: nothing is guessed. The conditions the diagnosis simulates
+(input speed, torque, direction) are read from the record's own samples; comments are kept (they
+carry notes such as `# encoder_zero: <id>`, `# input_speed_rpm: 1800`, `comment_value`). A path
+that is no readable UTF-8 text file (a folder, no permission, binary or other-encoding content) is
+refused in one line naming the file.
 """
 from __future__ import annotations
 
@@ -61,8 +66,11 @@ def write_te_result(path: str | Path, result, comments: list[str] = ()) -> None:
 # A bench sampling one output revolution ends one sample short of closing it (n samples span
 # n - 1 steps); a record covers a revolution if its travel plus this many median steps reaches 360.
 _CLOSING_STEPS = 1.5
-# Largest plausible encoder step between two samples; a step this large is a wrap (+-360 deg).
+# Largest plausible encoder step between two samples beyond what the speed explains; a step this
+# large is a wrap (+-360 deg).
 _MAX_STEP_DEG = 180.0
+# A time step this many times the median is a gap in the record (data missing), not a wrap.
+_GAP_STEPS = 5.0
 
 
 class RecordError(InputError):
@@ -99,9 +107,11 @@ class BenchRecord:
 
     @property
     def input_speed_rpm(self) -> float:
-        """Magnitude of the mean input speed (net input travel over the record's duration)."""
-        dur = self.time_s[-1] - self.time_s[0]
-        return float(abs(self.input_angle_deg[-1] - self.input_angle_deg[0]) / dur / 6.0)
+        """Magnitude of the running input speed: the median of the sample-to-sample speed, so a
+        start-up ramp (paper 001's 1 s in 7 s) is not averaged in (1200 rpm, not ~1100)."""
+        dt = np.diff(self.time_s)
+        ok = dt > 0
+        return float(np.median(np.abs(np.diff(self.input_angle_deg)[ok] / dt[ok])) / 6.0)
 
     @property
     def torque_Nm(self) -> float:
@@ -115,6 +125,17 @@ class BenchRecord:
             m = re.match(r"\s*encoder_zero\s*[:=]\s*(\S+)", line)
             if m:
                 return m.group(1)
+        return None
+
+    def comment_value(self, key: str) -> float | None:
+        """The number of a `# <key>: <number>` comment (e.g. input_speed_rpm), if there is one."""
+        for line in self.comments:
+            m = re.match(rf"\s*{re.escape(key)}\s*[:=]\s*([-+0-9.eE]+)\s*$", line)
+            if m:
+                try:
+                    return float(m.group(1))
+                except ValueError:
+                    return None
         return None
 
     def te_arcsec(self, ratio: float) -> np.ndarray:
@@ -141,25 +162,92 @@ def read_record(path: str | Path, columns: dict[str, str | int] | None = None,
 
     `columns` maps a required column to the source's name (or 0-based index); it is the only way
     to read other names (`header=True`) or headerless files (`header=False`, indices required).
-    Without it the four DESIGN.md names must be present: nothing is guessed.
+    Without it the four DESIGN.md names must be present: nothing is guessed. A record whose
+    motion reverses is refused, saying where (`read_records` splits it).
     """
-    path = Path(path)
+    path, comments, linenos, data, extra = _parse(Path(path), columns, header)
+    t, a_in, a_out, torque = data.T
+    _check_steps(path, linenos, t, a_in, a_out)
+    cuts = reversals(a_in)
+    if cuts:
+        k = cuts[0]
+        raise RecordError(f"{path}: row {linenos[k]}: the motion reverses (output "
+                          f"{a_out[k] - a_out[0]:+.2f} deg, then {a_out[-1] - a_out[k]:+.2f} deg); a record "
+                          f"runs one direction: split it there (diagnose does: dynamics.records.read_records)")
+    _check_travel(path, linenos, a_out)
+    return BenchRecord(str(path), t, a_in, a_out, torque, tuple(comments), extra)
+
+
+def read_records(path: str | Path, columns: dict[str, str | int] | None = None,
+                 header: bool = True) -> list[BenchRecord]:
+    """The record(s) of one file: split where the motion reverses (a forward-then-backward run),
+    each part checked alone and named `<file>#fw`, `#bw` (numbered if a direction repeats); the
+    parts of one file share one encoder zero (`encoder_zero: <file name>` unless the file says)."""
+    path, comments, linenos, data, extra = _parse(Path(path), columns, header)
+    t, a_in, a_out, _ = data.T
+    _check_steps(path, linenos, t, a_in, a_out)
+    cuts = reversals(a_in)
+    if not cuts:
+        _check_travel(path, linenos, a_out)
+        return [BenchRecord(str(path), *data.T, tuple(comments), extra)]
+    bounds = [0, *cuts, len(t) - 1]
+    dirs = ["fw" if a_out[b] >= a_out[a] else "bw" for a, b in zip(bounds[:-1], bounds[1:])]
+    zero = () if any(re.match(r"\s*encoder_zero\s*[:=]", c) for c in comments) else (f"encoder_zero: {path.name}",)
+    out = []
+    for j, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
+        n = dirs[:j + 1].count(dirs[j])
+        tag = dirs[j] + (str(n) if dirs.count(dirs[j]) > 1 else "")
+        sl = slice(a, b + 1)
+        _check_travel(Path(f"{path} (rows {linenos[a]}-{linenos[b]}, {tag} part)"), linenos[sl], a_out[sl])
+        out.append(BenchRecord(f"{path}#{tag}", *(c[sl] for c in data.T), tuple(comments) + zero,
+                               {k: v[sl] for k, v in extra.items()}))
+    return out
+
+
+def reversals(angle_deg, hysteresis_deg: float = 360.0) -> list[int]:
+    """Indices where the motion reverses: an extreme from which the angle then retreats by more
+    than `hysteresis_deg` (one input turn: far above encoder noise, and a glitch that large is
+    refused as a jump anyway)."""
+    a = np.asarray(angle_deg, float)
+    cuts, sign, k, n = [], 0, 0, len(a)
+    while k < n - 1:   # zig-zag: the running extreme of the current direction, confirmed by a retreat
+        if sign == 0:
+            up = np.flatnonzero(np.abs(a[k:] - a[k]) > hysteresis_deg)
+            if not up.size:
+                break
+            sign = 1 if a[k + up[0]] > a[k] else -1
+            continue
+        seg = sign * a[k:]
+        run_ext = np.maximum.accumulate(seg)
+        back = np.flatnonzero(run_ext - seg > hysteresis_deg)
+        if not back.size:
+            break
+        j = k + int(np.argmax(seg[:back[0] + 1]))
+        cuts.append(j)
+        k, sign = j, -sign
+    return cuts
+
+
+def _parse(path: Path, columns, header):
+    """(path, comments, file line of each data row, (n, 4) data, extra columns) of a record file."""
     lines = _text_lines(path)
-    comments, rows = [], []
+    comments, rows, linenos = [], [], []
     for lineno, line in enumerate(lines, start=1):
         s = line.strip()
         if not s:
             continue
-        if s.startswith("#"):
+        if s[0] == "#":
             if not rows:    # comments carry the conditions; keep those before the data
                 comments.append(s[1:].strip())
             continue
-        rows.append((lineno, [c.strip() for c in s.split(",")]))
+        rows.append(s)
+        linenos.append(lineno)
     columns = dict(columns or {})
+    names = None
     if header:
         if not rows:
             raise RecordError(f"{path}: no header row (expected {','.join(COLUMNS)})")
-        head_line, names = rows.pop(0)
+        head_line, names = linenos.pop(0), [c.strip() for c in rows.pop(0).split(",")]
         idx = {}
         for col in COLUMNS:
             src = columns.get(col, col)
@@ -180,12 +268,39 @@ def read_record(path: str | Path, columns: dict[str, str | int] | None = None,
             raise RecordError(f"{path}: a headerless record needs a 0-based column index for "
                               f"{', '.join(missing)} (column map NAME=INDEX)")
         idx = {c: columns[c] for c in COLUMNS}
-        names = None
     if not rows:
         raise RecordError(f"{path}: no data rows")
+    table = _fast_table(rows)
+    if table is None or table.shape[1] <= max(idx.values()):
+        return path, comments, linenos, *_slow_table(path, rows, linenos, idx, names)
+    data = table[:, [idx[c] for c in COLUMNS]]
+    bad = np.flatnonzero(~np.isfinite(data).all(axis=1))
+    if bad.size:
+        r = int(bad[0])
+        j = int(np.flatnonzero(~np.isfinite(data[r]))[0])
+        cell = rows[r].split(",")[idx[COLUMNS[j]]].strip()
+        raise RecordError(f"{path}: row {linenos[r]}: {COLUMNS[j]} = {cell!r}; values must be finite "
+                          f"(no NaN or inf)")
+    extra = {nm: table[:, k] for k, nm in enumerate(names or ()) if k not in idx.values() and k < table.shape[1]}
+    return path, comments, np.asarray(linenos), data, extra
+
+
+def _fast_table(rows: list[str]) -> np.ndarray | None:
+    """All rows as one float table (numpy's C parser), or None when any cell is not a number or
+    the rows differ in width: the row-by-row reader then names the first problem."""
+    import io
+    try:
+        with np.errstate(all="ignore"):
+            return np.loadtxt(io.StringIO("\n".join(rows)), delimiter=",", ndmin=2, dtype=float)
+    except ValueError:
+        return None
+
+
+def _slow_table(path, rows, linenos, idx, names):
     data = np.empty((len(rows), len(COLUMNS)))
     width = max(idx.values()) + 1
-    for r, (lineno, cells) in enumerate(rows):
+    cells_all = [[c.strip() for c in s.split(",")] for s in rows]
+    for r, (lineno, cells) in enumerate(zip(linenos, cells_all)):
         if len(cells) < width:
             raise RecordError(f"{path}: row {lineno}: {len(cells)} values, expected at least {width}")
         for j, col in enumerate(COLUMNS):
@@ -202,11 +317,9 @@ def read_record(path: str | Path, columns: dict[str, str | int] | None = None,
     if names is not None:
         for k, nm in enumerate(names):
             if k not in idx.values():
-                vals = [float(c[k]) if k < len(c) and _is_number(c[k]) else np.nan for _, c in rows]
+                vals = [float(c[k]) if k < len(c) and _is_number(c[k]) else np.nan for c in cells_all]
                 extra[nm] = np.asarray(vals)
-    t, a_in, a_out, torque = data.T
-    _check_record(path, [ln for ln, _ in rows], t, a_in, a_out)
-    return BenchRecord(str(path), t, a_in, a_out, torque, tuple(comments), extra)
+    return np.asarray(linenos), data, extra
 
 
 _ALLOWED = f"a record is a UTF-8 text CSV with the header {','.join(COLUMNS)}"
@@ -243,7 +356,7 @@ def _is_number(s: str) -> bool:
         return False
 
 
-def _check_record(path: Path, linenos: list[int], t, a_in, a_out) -> None:
+def _check_steps(path: Path, linenos, t, a_in, a_out) -> None:
     if len(t) < 3:
         raise RecordError(f"{path}: {len(t)} data rows; a record needs at least one output revolution")
     dt = np.diff(t)
@@ -254,12 +367,21 @@ def _check_record(path: Path, linenos: list[int], t, a_in, a_out) -> None:
                           f"(previous {t[k - 1]:g}); time must be strictly increasing")
     for name, a in (("input_angle_deg", a_in), ("output_angle_deg", a_out)):
         step = np.diff(a)
-        jump = np.flatnonzero(np.abs(step) > _MAX_STEP_DEG)
+        # what the speed explains over each step (a time gap moves the angle by speed x gap)
+        rate = float(np.median(step / dt))
+        jump = np.flatnonzero(np.abs(step - rate * dt) > _MAX_STEP_DEG)
         if jump.size:
             k = jump[0] + 1
+            gap = dt[k - 1] > _GAP_STEPS * float(np.median(dt))
+            why = (f"in a time gap of {dt[k - 1]:g} s, {step[k - 1] - rate * dt[k - 1]:+.3f} deg more than "
+                   f"the speed explains: the run is not continuous across it" if gap else
+                   f"the angle is wrapped, not unwrapped (steps must stay below {_MAX_STEP_DEG:g} deg; "
+                   f"unwrap it, e.g. numpy.unwrap)")
             raise RecordError(f"{path}: row {linenos[k]}: {name} jumps by {step[k - 1]:+.3f} deg "
-                              f"between samples: the angle is wrapped, not unwrapped (steps must "
-                              f"stay below {_MAX_STEP_DEG:g} deg; unwrap it, e.g. numpy.unwrap)")
+                              f"between samples: {why}")
+
+
+def _check_travel(path: Path, linenos, a_out) -> None:
     travel = abs(a_out[-1] - a_out[0])
     closing = _CLOSING_STEPS * float(np.median(np.abs(np.diff(a_out))))
     if travel + closing < 360.0:

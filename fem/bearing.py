@@ -7,7 +7,14 @@
       rigid modes only held), rotated to each needle; the cage holds them tangentially, so each
       has one rigid DOF, its radial shift;
   disc bore ring: from the crank hole a = r_e + 2 r_n (zero clearance: the clearance is the
-      dynamics stage's gap) out to 2a, clamped there (the rest of the disc is much stiffer).
+      dynamics stage's gap) out to the clamp radius b = a + t, t the thinnest ligament from a
+      crank hole to a free edge of the disc (tooth root of the modified profile, centre hole,
+      pillar holes, the next crank hole: `bore_ligament`): the ring of material the disc has
+      on every side of the bore (RV-40E: t = 7 mm to the centre hole, b = 22 mm; RV-160N: 12 mm,
+      b = 36 mm). The disc beyond it, with its real holes and edges, is fem.disc_body's, which
+      takes out this same ring (a..b, clamped at b, `bore_ring_compliance`) so that the two add
+      in series without double counting. (Before the issue-11 audit the clamp sat at 2a, beyond
+      the material that exists: 15 mm of ring where the RV-40E has 7.)
 The radial load F moves the eccentric core along +x (towards needle 0); contact on every needle
 within +-LOAD_ZONE_DEG of the load line is solved exactly by the condensed active-set solver
 (fem.contact.solve_rigid: frictionless, g >= 0, lambda >= 0, equilibrium of core and needles).
@@ -15,9 +22,12 @@ Needles beyond that zone are unloaded under a zero-clearance translation (their 
 delta |cos psi|); the model reports the load on its outermost needles so this can be checked.
 Deflection = the core's shift; it contains both Hertz contacts, the needle, race ovalisation of
 the eccentric ring and of the bore ring. Limits: linear elastic, frictionless, no crowning or tilt
-(uniform load along the needle), 2D section.
+(uniform load along the needle), 2D section; the bore ring is plane strain like the contacts
+(fem.disc_body's disc is plane stress, its ring's translation 1.22x this one's on the RV-40E,
+`clamped_ring_bore_compliance`; the ring translation is ~2.5 % of the bearing's deflection).
 References printed beside it (fem.hertz): Palmgren's needle approach at the FE's own most
-loaded needle force, and Stribeck's Q_max = 4.08 F/Z for the load sharing.
+loaded needle force, Stribeck's Q_max = 4.08 F/Z for the load sharing, and the exact bore-ring
+translation (`clamped_ring_bore_compliance`, Michell's n = 1 thick-ring solution).
 """
 from __future__ import annotations
 
@@ -50,14 +60,18 @@ class NeedleBearingFE:
 
 
 def needle_bearing_fe(radial_loads_N, *, eccentric_radius_m: float, needle_radius_m: float,
-                      needle_count: int, needle_length_m: float, E_Pa: float, nu: float,
-                      mesh_size_m: float | None = None) -> NeedleBearingFE:
-    """Load-deflection of a needle bearing section (see module); one factorization per body."""
+                      needle_count: int, needle_length_m: float, bore_clamp_radius_m: float, E_Pa: float,
+                      nu: float, mesh_size_m: float | None = None) -> NeedleBearingFE:
+    """Load-deflection of a needle bearing section (see module); one factorization per body.
+    bore_clamp_radius_m: outer radius of the disc's bore ring (`bore_clamp_radius_m`)."""
     loads = np.asarray(radial_loads_N, float)
     re, rn, Z, L = eccentric_radius_m, needle_radius_m, int(needle_count), needle_length_m
     for name, v in (("eccentric radius", re), ("needle radius", rn), ("needle length", L)):
         if not (v > 0):
             raise InputError(f"needle bearing {name} = {v!r}: must be positive")
+    if not (bore_clamp_radius_m > re + 2 * rn):
+        raise InputError(f"needle bearing bore clamp radius = {bore_clamp_radius_m * 1e3:g} mm: must "
+                         f"exceed the bore radius {(re + 2 * rn) * 1e3:g} mm")
     if Z < 4 or Z * 2 * rn > 2 * math.pi * (re + rn):
         raise InputError(f"needle bearing needle_count = {Z}: allowed 4..{int(math.pi * (re + rn) / rn)}")
     if loads.size == 0 or np.any(loads <= 0):
@@ -77,7 +91,8 @@ def needle_bearing_fe(radial_loads_N, *, eccentric_radius_m: float, needle_radiu
     psi = np.sort(psi[np.abs(psi) <= math.radians(LOAD_ZONE_DEG) + 1e-9])
     h_ring = min(re / 8, 0.5e-3)
     ecc = annulus_mesh(re / 2, re, psi, h, h_ring, GROWTH, graded_side="outer")
-    bore = annulus_mesh(a, 2 * a, psi, h, h_ring, GROWTH, graded_side="inner")
+    bore = annulus_mesh(a, bore_clamp_radius_m, psi, h, min(h_ring, (bore_clamp_radius_m - a) / 4), GROWTH,
+                        graded_side="inner")
     needle = CircleBody.build(rn, h, rn / 4, E_Pa, nu, window, two_sided=True)
 
     def candidates(mesh, side, radius):
@@ -145,25 +160,84 @@ def needle_bearing_fe(radial_loads_N, *, eccentric_radius_m: float, needle_radiu
                            (ecc, bore, needle.mesh))
 
 
+def bore_ligament(case) -> tuple[float, str]:
+    """Thinnest wall from a crank hole to a free edge of the disc [mm] and that edge's name: the
+    tooth root of the modified profile (R + dR - E - Rr - dRr) or another hole (centre, pillar,
+    crank; geometry.solids.disc_holes, the one home of the hole layout)."""
+    from geometry.profile import profile_args
+    from geometry.solids import disc_holes
+    args = profile_args(case)
+    root = args["R"] - case.cycloid.eccentricity_mm - args["Rr"]
+    holes = disc_holes(case)
+    best = (math.inf, "")
+    for h in (h for h in holes if h.name.startswith("crank")):
+        best = min(best, (root - math.hypot(h.x_mm, h.y_mm) - h.radius_mm, "tooth root"))
+        for o in holes:
+            if o is not h:
+                best = min(best, (math.hypot(h.x_mm - o.x_mm, h.y_mm - o.y_mm) - h.radius_mm - o.radius_mm,
+                                  f"{o.name.rstrip('0123456789')} hole"))
+    return best
+
+
+def bore_clamp_radius_m(case) -> float:
+    """Outer radius of the bore ring the needle model carries: crank-hole radius + the thinnest
+    ligament (`bore_ligament`); fem.disc_body takes out the same ring."""
+    return (case.disc.crank_hole_radius_mm + bore_ligament(case)[0]) * 1e-3
+
+
+def clamped_ring_bore_compliance(inner_radius_m: float, outer_radius_m: float, E_Pa: float, nu: float,
+                                 thickness_m: float, *, plane_strain: bool = True) -> float:
+    """Exact mean translation per N of the bore of a ring a..b clamped at b under a radial bore
+    load of resultant F (any distribution symmetric about its line, e.g. the half-cosine) [m/N].
+    By Betti only the load's first Fourier mode, q cos(theta) with q = F / (pi a w), works on a
+    translation. The n = 1 Navier solution (u_r = U cos, u_theta = V sin; k = (lambda + 2 mu) / mu,
+    lambda -> 2 lambda mu / (lambda + 2 mu) in plane stress) is
+      U = (3 - k) A r^2 / 8 + (1 + k) B ln r / 2 + P / r^2 + T,
+      V = (3 k - 1) A r^2 / 8 - (1 + k) B ln r / 2 + (1 - k) B / 2 + P / r^2 - T
+    (dilatation (A r + B / r) cos), with U = V = 0 at b, sigma_rr = -q cos, sigma_rtheta = 0 at a;
+    the bore's mean translation is (U(a) - V(a)) / 2."""
+    a, b = inner_radius_m, outer_radius_m
+    lam, mu = elastic.lame(E_Pa, nu)
+    if not plane_strain:
+        lam = 2 * lam * mu / (lam + 2 * mu)
+    k = (lam + 2 * mu) / mu
+    al, be, ga, ze = (3 - k) / 8, (3 * k - 1) / 8, (1 + k) / 2, (1 - k) / 2
+
+    def uv(r):   # rows U, V, U', V' over the unknowns (A, B, P, T)
+        return np.array([[al * r * r, ga * math.log(r), r ** -2, 1.0],
+                         [be * r * r, -ga * math.log(r) + ze, r ** -2, -1.0],
+                         [2 * al * r, ga / r, -2 * r ** -3, 0.0],
+                         [2 * be * r, -ga / r, -2 * r ** -3, 0.0]])
+    Ua, Ub = uv(a), uv(b)
+    q = 1.0 / (math.pi * a * thickness_m)
+    M = np.vstack([Ub[0], Ub[1],
+                   lam * np.array([a, 1 / a, 0, 0]) + 2 * mu * Ua[2],     # sigma_rr(a) = -q
+                   -Ua[0] / a + Ua[3] - Ua[1] / a])                      # sigma_rtheta(a) = 0
+    c = np.linalg.solve(M, [0.0, 0.0, -q, 0.0])
+    return float((Ua[0] - Ua[1]) @ c / 2)
+
+
 def turning_arm_curve(case, max_load_N: float, *, mesh_size_m: float | None = None) -> dict:
     """The case's turning-arm bearing swept up to max_load_N (LOAD_FRACTIONS of it)."""
     k = case.crankshaft
     E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
     loads = max_load_N * np.asarray(LOAD_FRACTIONS)
+    b, (t_mm, edge) = bore_clamp_radius_m(case), bore_ligament(case)
     r = needle_bearing_fe(loads, eccentric_radius_m=k.eccentric_radius_mm * 1e-3,
                           needle_radius_m=k.needle_diameter_mm / 2 * 1e-3, needle_count=k.needle_count,
-                          needle_length_m=k.needle_length_mm * 1e-3, E_Pa=E, nu=nu, mesh_size_m=mesh_size_m)
-    a = case.disc.crank_hole_radius_mm * 1e-3
-    # Lame: the loaded half of the bore carries F over a projected area 2 a L -> p ~ F / (2 a L)
-    p = max_load_N / (2 * a * k.needle_length_mm * 1e-3)
-    lame = float(hertz.lame_radial_displacement(a, a, 2 * a, p, 0.0, E, nu))
+                          needle_length_m=k.needle_length_mm * 1e-3, bore_clamp_radius_m=b, E_Pa=E, nu=nu,
+                          mesh_size_m=mesh_size_m)
+    ring = max_load_N * clamped_ring_bore_compliance(case.disc.crank_hole_radius_mm * 1e-3, b, E, nu,
+                                                     k.needle_length_mm * 1e-3)
     return {"load_N": r.load_N, "deflection_m": r.deflection_m, "law_k_N_per_m_pow": r.law_k_N_per_m_pow,
-            "law_n": r.law_n, "lame_ring_deflection_at_max_m": lame,
+            "law_n": r.law_n, "lame_ring_deflection_at_max_m": ring, "bore_clamp_radius_m": b,
             "palmgren_deflection_m": r.palmgren_deflection_m, "fe_qmax_N": r.needle_load_N.max(axis=1),
             "stribeck_qmax_N": r.stribeck_qmax_N, "mesh_size_m": r.mesh_size_m, "result": r,
             "source": "2D plane-strain FE (P1, scikit-fem) of eccentric ring (core clamped at r_e/2) + "
-                      "caged needles + disc bore ring (clamped at twice the bore), zero clearance, "
-                      "condensed frictionless contact (fem.contact.solve_rigid), times the needle length"}
+                      f"caged needles + disc bore ring (clamped at {b * 1e3:g} mm: the bore plus the "
+                      f"thinnest ligament, {t_mm:.3g} mm to the {edge}), zero clearance, condensed "
+                      "frictionless contact (fem.contact.solve_rigid), times the needle length; "
+                      "lame_ring: the bore ring's exact translation (Michell n = 1) at the largest load"}
 
 
 def turning_arm_max_load(case, torque_Nm: float) -> float:

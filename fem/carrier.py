@@ -511,9 +511,17 @@ def carrier_fe(g: CarrierGeometry, E_Pa: float, nu: float, *, levels=DEFAULT_LEV
                    solve_seconds=coarse.solve_seconds + fine.solve_seconds)
 
 
+def case_geometry(case) -> CarrierGeometry:
+    """CarrierGeometry.from_case with the seats sized to the support bearing the FE stage selects
+    (fem.tapered_roller.case_support_setup): bore = cup outer radius D / 2, seat band = width T."""
+    from fem.tapered_roller import case_support_setup
+    b = case_support_setup(case).bearing
+    return CarrierGeometry.from_case(case).with_(seat_bore_radius_mm=b.D_mm / 2, bearing_width_mm=b.T_mm)
+
+
 def carrier_for_case(case, **kw) -> tuple[CarrierGeometry, CarrierFE]:
-    """The case's carrier (CarrierGeometry.from_case) and its default estimate (carrier_fe)."""
-    g = CarrierGeometry.from_case(case)
+    """The case's carrier (case_geometry) and its default estimate (carrier_fe)."""
+    g = case_geometry(case)
     return g, carrier_fe(g, case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio, **kw)
 
 

@@ -100,16 +100,19 @@ def tributary_lengths(points: np.ndarray) -> np.ndarray:
     return 0.5 * (np.concatenate([[seg[0]], seg]) + np.concatenate([seg, [seg[-1]]]))
 
 
-def solve_force(setup: ContactSetup, force_per_m: float, *, max_iter: int = 500) -> tuple:
-    """Active-set solution of the force-controlled LCP; returns (lambda [N/m], delta [m], its)."""
+def solve_force(setup: ContactSetup, force_per_m: float, *, max_iter: int = 500, active0=None) -> tuple:
+    """Active-set solution of the force-controlled LCP; returns (lambda [N/m], delta [m], its).
+    active0: rows to start from (the previous load level's contact: the solution is unique, a
+    good start only saves iterations); default the first candidate to touch."""
     if force_per_m <= 0:
         raise ContactError(f"contact load = {force_per_m:g} N/m: must be positive")
     s = setup.direction
     if np.all(s <= 0):
         raise ContactError("no candidate node faces the load direction")
-    first = int(np.argmin(np.where(s > 0, setup.gap0_m, np.inf)))
+    if active0 is None or not len(active0):
+        active0 = [int(np.argmin(np.where(s > 0, setup.gap0_m, np.inf)))]
     lam, q, its = solve_rigid(setup.compliance_m_per_N, setup.gap0_m, s[:, None],
-                              np.array([force_per_m]), [first], max_iter=max_iter)
+                              np.array([force_per_m]), active0, max_iter=max_iter)
     return lam, float(q[0]), its
 
 
@@ -212,9 +215,9 @@ def recovered_peak(coord: np.ndarray, pressure: np.ndarray) -> float:
     return float(np.sqrt(max(np.polyval([a, b, c], x_peak), 0.0)))
 
 
-def solve_load(setup: ContactSetup, force_N: float, width_m: float) -> ContactResult:
+def solve_load(setup: ContactSetup, force_N: float, width_m: float, active0=None) -> ContactResult:
     """Contact at a total normal force force_N over a face width (plane strain)."""
-    lam, delta, its = solve_force(setup, force_N / width_m)
+    lam, delta, its = solve_force(setup, force_N / width_m, active0=active0)
     pressure = lam / setup.tributary_m
     active = lam > 0
     return ContactResult(force_N=float(force_N), approach_m=delta,

@@ -368,13 +368,19 @@ def output_compliance(case, flex: CrankFlexibility, crank_angle_rad: float = 0.0
             "force_parallel_N_per_Nm": float(np.linalg.norm(par[0]))}
 
 
-def summary(case, flex: CrankFlexibility, beam: CrankFlexibility | None = None) -> dict:
+def summary(case, flex: CrankFlexibility, beam: CrankFlexibility | None = None,
+            support_compliance_m_per_N: float | None = None) -> dict:
     """Figures for a report: tilt (opposite) and parallel compliances per N, their ratio to the single
     load (what one lateral spring uses), the stepped beam's figures, and the output stiffness of
-    crank bending, shaft alone and on the case's support bearings."""
+    crank bending, shaft alone and on the support bearings (default: the case's tapered roller pair,
+    fem.tapered_roller, tangent at the rated torque's load)."""
     beam = beam or beam_flexibility(case)
     single = flex.single_compliance_m_per_N()
-    sup = with_elastic_supports(flex, 1e-6 / case.crankshaft.support_bearing_stiffness_N_per_um)
+    if support_compliance_m_per_N is None:
+        from fem.tapered_roller import case_support_bearings, crank_support_load_N
+        top = crank_support_load_N(case, case.rated_torque_Nm)["radial_N"] * 2
+        support_compliance_m_per_N = 1.0 / case_support_bearings(case, top, points=3)["stiffness_N_per_m"]
+    sup = with_elastic_supports(flex, support_compliance_m_per_N)
     out = {"single_m_per_N": single, "opposite": flex.opposite("x"), "parallel": flex.parallel("x"),
            "opposite_y": flex.opposite("y"), "parallel_y": flex.parallel("y")}
     out["opposite_over_single"] = out["opposite"]["deflection_1_m_per_N"] / single
@@ -388,3 +394,54 @@ def summary(case, flex: CrankFlexibility, beam: CrankFlexibility | None = None) 
     out["output_shaft_alone"] = output_compliance(case, flex)
     out["output_with_support_bearings"] = output_compliance(case, sup)
     return out
+
+
+# ----------------------------------------------------------------------------- stiffness.json entry
+def two_eccentric_blocks(flex: CrankFlexibility) -> tuple[np.ndarray, np.ndarray]:
+    """The lumped model's view (fem.stiffness.CrankBending): compliance (2, 2) of the eccentrics'
+    lateral displacements under their lateral loads, x and y planes averaged (the section is round:
+    they differ by the mesh only) and symmetrized; journal_force (2, 2) = force passed to journal s
+    (J1 at z = 0, J2 at z = span) per N on eccentric i, the planes averaged."""
+    M, P = flex.matrix, flex.journal_force
+    C = 0.5 * (M[np.ix_([0, 2], [0, 2])] + M[np.ix_([1, 3], [1, 3])])
+    J = 0.5 * (P[np.ix_([0, 2], [0, 2])] + P[np.ix_([1, 3], [1, 3])])
+    return 0.5 * (C + C.T), J
+
+
+def eccentric_slope_per_N(case, flex: CrankFlexibility) -> float:
+    """Largest tilt of an eccentric per N of its own load under the real loading (both discs'
+    crank-hole forces per unit output torque, crank_forces_per_torque, every crank, crank angle 0):
+    |S_i| / |f_i| with S_i = C_SF f, the tilt vector (its full size: the needle edge load takes it in
+    the load plane, an upper bound)."""
+    f = crank_forces_per_torque(case)
+    worst = 0.0
+    for fj in f:
+        s = flex.matrix[4:8, :4] @ fj
+        for i in range(2):
+            worst = max(worst, float(np.hypot(*s[2 * i:2 * i + 2]) / np.hypot(*fj[2 * i:2 * i + 2])))
+    return worst
+
+
+def case_crank_bending(case, *, mesh3: Mesh3D | None = None, edge_length_m: float | None = None) -> dict:
+    """The FE flexibility of the case's crankshaft reduced to fem.stiffness.CrankBending, with its
+    stepped-beam reference (same loads, supports spread over the seats) and the statics of the
+    journal reactions (positive shares summing to 1 per eccentric)."""
+    fe = crank_flexibility(case, edge_length_m, mesh3=mesh3)
+    beam = beam_flexibility(case)
+    C, J = two_eccentric_blocks(fe)
+    Cb, Jb = two_eccentric_blocks(beam)
+    M = fe.matrix
+    xy = float(np.abs(M[np.ix_([0, 2], [1, 3])]).max() / np.abs(M[:4, :4]).max())
+    check = {"fe_C_m_per_N": C.tolist(), "beam_C_m_per_N": Cb.tolist(),
+             "fe_over_beam_C11": float(C[0, 0] / Cb[0, 0]), "fe_over_beam_C12": float(C[0, 1] / Cb[0, 1]),
+             "fe_over_beam_opposite": float((C[0, 0] - C[0, 1]) / (Cb[0, 0] - Cb[0, 1])),
+             "fe_over_beam_parallel": float((C[0, 0] + C[0, 1]) / (Cb[0, 0] + Cb[0, 1])),
+             "x_over_y_C11": float(M[0, 0] / M[1, 1]), "xy_coupling": xy, "asymmetry": fe.asymmetry,
+             "journal_force_fe": J.tolist(), "journal_force_statics": Jb.tolist(),
+             "journal_force_sum": J.sum(axis=0).tolist(),
+             "output_compliance": output_compliance(case, fe), "dofs": fe.dofs,
+             "edge_length_m": fe.edge_length_m}
+    return {"compliance_m_per_N": C, "journal_force": J, "flex": fe, "check": check,
+            "source": ("3D FE (P2 tetrahedra on the mesh stage's crankshaft mesh, scikit-fem), both "
+                       "eccentrics loaded independently, journals pinned at the bearing centres with the "
+                       "reaction spread over each seat (fem.crank_tilt); x and y planes averaged")}

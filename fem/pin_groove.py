@@ -356,3 +356,45 @@ def case_pin_groove_law(case, loads_N, *, clearance: str = "mean") -> PinGrooveL
     return pin_groove_law(loads_N, radius_m=R, clearance_m=dR, loaded_length_m=w,
                           pin_length_m=cy.disc_count * w, E_Pa=mat.youngs_modulus_GPa * 1e9,
                           nu=mat.poisson_ratio, datum_depth_m=pitch)
+
+
+def case_series(case, loads_N) -> dict:
+    """The stiffness.json entry: the housing approach behind the groove plus the bending term
+    (PinGrooveLaw.series_approach_m) over the pin table's loads, and its checks: the conformal
+    contact at 1 deg against Hertz line contact with the clearance radius R' = R (R + dR) / dR
+    (half-width, peak pressure, housing approach to a shallow datum d = R / 10, where the hole's
+    curvature is negligible), and at the rated pin force the groove's tangent stiffness beside the
+    Hertz-limit housing approach to the same datum (one pin pitch)."""
+    from fem import hertz
+    from fem.pin_contact import contact_force_at_torque
+    loads = np.asarray(loads_N, float)
+    law = case_pin_groove_law(case, loads)
+    cy, mat = case.cycloid, case.material
+    E, nu = mat.youngs_modulus_GPa * 1e9, mat.poisson_ratio
+    R, w = cy.pin_radius_mm * 1e-3, cy.width_mm * 1e-3
+    dR, pitch = law.clearance_m, law.datum_depth_m
+    Es = hertz.contact_modulus(E, nu)
+    Rp = R * (R + dR) / dR
+    s = conformal_state(math.radians(1.0), radius_m=R, clearance_m=dR, E_Pa=E, nu=nu, datum_depth_m=R / 10)
+    F1 = s.load_per_length_N_per_m * w
+    p0, b = (float(v) for v in hertz.hertz_line(F1, w, Rp, Es))
+    Fr = contact_force_at_torque(case, case.rated_torque_Nm)
+    at = case_pin_groove_law(case, np.array([0.999, 1.0, 1.001]) * Fr)
+    _, br = hertz.hertz_line(Fr, w, Rp, Es)
+    hertz_housing = float(hertz.half_plane_approach(Fr, w, float(br), pitch, E, nu))
+    check = {"hertz_limit_1deg": {"half_width_error": R * math.sin(s.eps_rad) / b - 1,
+                                  "peak_pressure_error": float(s.pressure_Pa[0]) / p0 - 1,
+                                  "housing_approach_error": s.housing_approach_m
+                                  / float(hertz.half_plane_approach(F1, w, b, R / 10, E, nu)) - 1},
+             "rated_pin_force_N": Fr, "contact_half_angle_at_rated_deg": math.degrees(float(at.eps_rad[1])),
+             "series_approach_at_rated_m": float(at.series_approach_m[1]),
+             "hertz_limit_housing_approach_at_rated_m": hertz_housing,
+             "tangent_at_rated_N_per_m": float(at.tangent_stiffness_N_per_m()[1]),
+             "bending_factor_at_rated": float(at.bending_factor[1]),
+             "clearance_m": dR, "datum_depth_m": pitch,
+             "max_contact_half_angle_deg": math.degrees(float(law.eps_rad.max()))}
+    return {"load_N": loads, "series_approach_m": law.series_approach_m, "check": check,
+            "source": (f"conformal contact of the pin in an H7/h6 groove (mean radial clearance {dR * 1e6:.1f} um, "
+                       f"ISO 286), exact 2D Michell solution of the linearised geometry; series part = the "
+                       f"housing behind the groove to one pin pitch depth, times the pin-bending factor of a "
+                       f"continuous groove (fem.pin_groove); the pin body is in the tooth-pair FE")}

@@ -1,8 +1,8 @@
 """The stiffness artifact: what the FEM stage hands the dynamics stage (`stiffness.json`).
 
-Schema `rv-stiffness/2`, SI units in every key. All compliances are FE results of this project's
-own geometry except where `sources` says otherwise (the involute mesh uses ISO 6336-1's single-
-tooth stiffness, the support bearings the case file's assumed catalog figure).
+Schema `rv-stiffness/3`, SI units in every key. Every compliance is an FE result of this project's
+own geometry or a closed form applied to stated geometry; `sources` says which, `checks` gives each
+one's FE-vs-closed-form comparison. No entry is scaled or fitted to a target.
 
 pin_contact        one cycloid tooth against one pin, 2D plane strain times the disc width:
   position_deg       (P,) pin phase from the line of centres (0 = towards the eccentric, deg)
@@ -16,12 +16,33 @@ turning_arm          needle bearing between eccentric and disc crank hole, radia
   load_N (L,), deflection_m (L,), law_k_N_per_m_pow, law_n
 crankshaft           eccentric-centre compliance of the shaft on its support bearings:
   bending_stiffness_N_per_m (lateral, at an eccentric), torsional_stiffness_Nm_per_rad (planet to eccentric)
-support_bearing      radial_stiffness_N_per_m (per bearing)
+support_bearings     one crank support bearing (a standard tapered roller bearing, fem.tapered_roller):
+  designation, roller_count, roller_length_m, roller_diameter_m, contact_angle_deg, preload_N,
+  load_N (L,), deflection_m (L,) its radial load-deflection (preloaded pair, per bearing),
+  operating_load_N (per bearing at rated torque), stiffness_N_per_m (tangent there: the model's
+  linear spring per bearing, isotropic)
+crank_bending        the shaft alone between its two eccentrics (fem.crank_tilt, 3D FE), pinned at the
+  bearing centres: compliance_m_per_N (2, 2) lateral displacement of eccentric i per N on
+  eccentric j (mean of x and y), journal_force (2, 2) reaction at journal s (0: J1, end-plate side;
+  1: J2, flange side) per N on eccentric i
+carrier              seat flexibility of the carrier (fem.carrier, 3D FE): compliance_m_per_N
+  (4 nc, 4 nc), order crank j, seat (flange, end plate), direction (x, y), carrier frame with
+  crank j at angle 2 pi j / nc
+pin_series           what lies in series with each cycloid-pin contact besides the tooth-pair FE:
+  disc_body_compliance_m_per_N (fem.disc_body: tooth ring against crank holes, per pin, energy-
+  equivalent under the classical sharing), groove_load_N (G,), groove_approach_m (G,) (fem.pin_groove:
+  housing behind the pin's groove)
+checks               per entry, the FE figure beside its closed form (free form, reported)
 involute_mesh        mean_stiffness_N_per_m, stiffness_variation (peak-to-peak / mean), contact_ratio
 made_from            what it was made from (geometry.fingerprint.Provenance: case fingerprint, input
                      mesh fingerprint); null only for models built in memory (tests). Read for a case
                      (`for_case`, `path_for_case`, `load(path, case)`), a file made from another case
-                     or another version of it is refused. Schema 2 added made_from.
+                     or another version of it is refused. Schema 2 added made_from; schema 3 the support bearings,
+                     crank bending matrix, carrier and pin series parts (issue 11).
+
+Composition for the lumped model (pure functions of this file, so that the dynamics and the
+compliance budget read one definition): `support_compliance_parts` (crank-axis displacement per
+disc plane, carrier frame) and `pin_law` (tooth-pin law with the series parts, refitted).
 """
 from __future__ import annotations
 
@@ -34,7 +55,11 @@ import numpy as np
 from geometry.artifacts import InputError, write_json_atomic
 from geometry.fingerprint import Provenance
 
-SCHEMA = "rv-stiffness/2"
+SCHEMA = "rv-stiffness/3"
+
+# components of the compliance path, in path order (dynamics.budget splits the couplings into them)
+COMPONENTS = ("involute_mesh", "crank_torsion", "support_bearings", "crank_bending", "carrier",
+              "needle_bearings", "pin_contact", "disc_body", "pin_groove")
 
 
 class StiffnessError(InputError):
@@ -70,19 +95,109 @@ class TurningArm:
 
 
 @dataclass(frozen=True)
+class SupportBearings:
+    """One crank support bearing (two per crank, one at each journal), radial."""
+    designation: str
+    roller_count: int
+    roller_length_m: float
+    roller_diameter_m: float
+    contact_angle_deg: float
+    preload_N: float
+    load_N: np.ndarray
+    deflection_m: np.ndarray
+    operating_load_N: float
+    stiffness_N_per_m: float          # tangent at operating_load_N: the model's spring per bearing
+
+
+@dataclass(frozen=True)
+class CrankBending:
+    compliance_m_per_N: np.ndarray    # (2, 2) eccentric i per N on eccentric j, shaft alone, pinned
+    journal_force: np.ndarray         # (2, 2) journal s (J1 end plate, J2 flange) per N on eccentric i
+
+
+@dataclass(frozen=True)
+class CarrierSeats:
+    compliance_m_per_N: np.ndarray    # (4 nc, 4 nc) crank, seat (flange, end plate), (x, y)
+
+
+@dataclass(frozen=True)
+class PinSeries:
+    disc_body_compliance_m_per_N: float
+    groove_load_N: np.ndarray
+    groove_approach_m: np.ndarray
+
+    def groove_m(self, force_N):
+        """Housing approach at a pin force (power law through the table's ends beyond it)."""
+        F = np.atleast_1d(np.maximum(np.asarray(force_N, float), 0.0))
+        L, d = self.groove_load_N, self.groove_approach_m
+        n = np.log(d[-1] / d[0]) / np.log(L[-1] / L[0])
+        out = np.interp(F, L, d)
+        lo, hi = F < L[0], F > L[-1]
+        out[lo] = d[0] * (F[lo] / L[0]) ** n
+        out[hi] = d[-1] * (F[hi] / L[-1]) ** n
+        return out
+
+
+@dataclass(frozen=True)
 class StiffnessModel:
     case_name: str
     pin_contact: PinContact
     turning_arm: TurningArm
     crankshaft_bending_stiffness_N_per_m: float
     crankshaft_torsional_stiffness_Nm_per_rad: float
-    support_bearing_radial_stiffness_N_per_m: float
     involute_mesh_mean_stiffness_N_per_m: float
     involute_mesh_stiffness_variation: float
     involute_mesh_contact_ratio: float
+    support_bearings: SupportBearings = None
+    crank_bending: CrankBending = None
+    carrier: CarrierSeats = None
+    pin_series: PinSeries = None
     sources: dict = field(default_factory=dict)   # quantity -> where it comes from
-    extras: dict = field(default_factory=dict)    # mesh sizes, convergence, checks (free form)
+    checks: dict = field(default_factory=dict)    # entry -> FE figure beside its closed form
+    extras: dict = field(default_factory=dict)    # mesh sizes, convergence (free form)
     made_from: Provenance | None = None           # case and input fingerprints (None: in memory only)
+
+    @property
+    def support_bearing_radial_stiffness_N_per_m(self) -> float:
+        return float(self.support_bearings.stiffness_N_per_m)
+
+    def stiffened(self, component: str, factor: float) -> "StiffnessModel":
+        """A copy with one component's compliance divided by `factor` (component in COMPONENTS, or
+        "all"): what-if studies and the diagnosis' located compliances."""
+        import dataclasses as dc
+        if component == "all":
+            m = self
+            for c in COMPONENTS:
+                m = m.stiffened(c, factor)
+            return m
+        f = float(factor)
+        if not (np.isfinite(f) and f > 0):
+            raise ValueError(f"stiffening factor {factor!r}: must be finite and > 0")
+        pc, ta, ps = self.pin_contact, self.turning_arm, self.pin_series
+        if component == "involute_mesh":
+            return dc.replace(self, involute_mesh_mean_stiffness_N_per_m=self.involute_mesh_mean_stiffness_N_per_m * f)
+        if component == "crank_torsion":
+            return dc.replace(self, crankshaft_torsional_stiffness_Nm_per_rad=self.crankshaft_torsional_stiffness_Nm_per_rad * f)
+        if component == "support_bearings":
+            sb = self.support_bearings
+            return dc.replace(self, support_bearings=dc.replace(sb, deflection_m=sb.deflection_m / f,
+                                                                stiffness_N_per_m=sb.stiffness_N_per_m * f))
+        if component == "crank_bending":
+            return dc.replace(self, crankshaft_bending_stiffness_N_per_m=self.crankshaft_bending_stiffness_N_per_m * f,
+                              crank_bending=dc.replace(self.crank_bending, compliance_m_per_N=self.crank_bending.compliance_m_per_N / f))
+        if component == "carrier":
+            return dc.replace(self, carrier=CarrierSeats(self.carrier.compliance_m_per_N / f))
+        if component == "needle_bearings":
+            return dc.replace(self, turning_arm=dc.replace(ta, deflection_m=ta.deflection_m / f,
+                                                           law_k_N_per_m_pow=ta.law_k_N_per_m_pow * f ** ta.law_n))
+        if component == "pin_contact":
+            return dc.replace(self, pin_contact=dc.replace(pc, approach_m=pc.approach_m / f,
+                                                           law_k_N_per_m_pow=pc.law_k_N_per_m_pow * f ** pc.law_n))
+        if component == "disc_body":
+            return dc.replace(self, pin_series=dc.replace(ps, disc_body_compliance_m_per_N=ps.disc_body_compliance_m_per_N / f))
+        if component == "pin_groove":
+            return dc.replace(self, pin_series=dc.replace(ps, groove_approach_m=ps.groove_approach_m / f))
+        raise ValueError(f"component {component!r}: allowed {', '.join(COMPONENTS)} or 'all'")
 
     def to_json(self) -> dict:
         pc, ta = self.pin_contact, self.turning_arm
@@ -99,12 +214,19 @@ class StiffnessModel:
             "crankshaft": {"bending_stiffness_N_per_m": float(self.crankshaft_bending_stiffness_N_per_m),
                            "torsional_stiffness_Nm_per_rad":
                                float(self.crankshaft_torsional_stiffness_Nm_per_rad)},
-            "support_bearing": {"radial_stiffness_N_per_m":
-                                float(self.support_bearing_radial_stiffness_N_per_m)},
+            "support_bearings": {k: (arr(v) if isinstance(v, np.ndarray) else v)
+                                 for k, v in vars(self.support_bearings).items()},
+            "crank_bending": {"compliance_m_per_N": arr(self.crank_bending.compliance_m_per_N),
+                              "journal_force": arr(self.crank_bending.journal_force)},
+            "carrier": {"compliance_m_per_N": arr(self.carrier.compliance_m_per_N)},
+            "pin_series": {"disc_body_compliance_m_per_N": float(self.pin_series.disc_body_compliance_m_per_N),
+                           "groove_load_N": arr(self.pin_series.groove_load_N),
+                           "groove_approach_m": arr(self.pin_series.groove_approach_m)},
             "involute_mesh": {"mean_stiffness_N_per_m": float(self.involute_mesh_mean_stiffness_N_per_m),
                               "stiffness_variation": float(self.involute_mesh_stiffness_variation),
                               "contact_ratio": float(self.involute_mesh_contact_ratio)},
             "sources": self.sources,
+            "checks": self.checks,
             "extras": self.extras,
             "made_from": None if self.made_from is None else self.made_from.to_json(),
         }
@@ -128,12 +250,18 @@ class StiffnessModel:
                 crankshaft_bending_stiffness_N_per_m=float(data["crankshaft"]["bending_stiffness_N_per_m"]),
                 crankshaft_torsional_stiffness_Nm_per_rad=float(
                     data["crankshaft"]["torsional_stiffness_Nm_per_rad"]),
-                support_bearing_radial_stiffness_N_per_m=float(
-                    data["support_bearing"]["radial_stiffness_N_per_m"]),
                 involute_mesh_mean_stiffness_N_per_m=float(data["involute_mesh"]["mean_stiffness_N_per_m"]),
                 involute_mesh_stiffness_variation=float(data["involute_mesh"]["stiffness_variation"]),
                 involute_mesh_contact_ratio=float(data["involute_mesh"]["contact_ratio"]),
-                sources=data.get("sources", {}), extras=data.get("extras", {}), made_from=made)
+                support_bearings=_support_bearings(data["support_bearings"]),
+                crank_bending=CrankBending(np.asarray(data["crank_bending"]["compliance_m_per_N"], float),
+                                           np.asarray(data["crank_bending"]["journal_force"], float)),
+                carrier=CarrierSeats(np.asarray(data["carrier"]["compliance_m_per_N"], float)),
+                pin_series=PinSeries(float(data["pin_series"]["disc_body_compliance_m_per_N"]),
+                                     np.asarray(data["pin_series"]["groove_load_N"], float),
+                                     np.asarray(data["pin_series"]["groove_approach_m"], float)),
+                sources=data.get("sources", {}), checks=data.get("checks", {}), extras=data.get("extras", {}),
+                made_from=made)
         except (KeyError, TypeError) as exc:
             raise StiffnessError(f"{where}: missing or malformed entry {exc}") from None
         model.check(where)
@@ -148,11 +276,111 @@ class StiffnessModel:
                                      f"{getattr(pc, name).shape}, expected ({P}, {L})")
         if np.any(np.diff(pc.position_deg) <= 0):
             raise StiffnessError(f"{where}: pin_contact.position_deg must increase")
+        for name in ("support_bearings", "crank_bending", "carrier", "pin_series"):
+            if getattr(self, name) is None:
+                raise StiffnessError(f"{where}: no {name} entry (schema {SCHEMA} needs every part of the path)")
+        sb, cb, ps = self.support_bearings, self.crank_bending, self.pin_series
         scalars = [self.crankshaft_bending_stiffness_N_per_m, self.crankshaft_torsional_stiffness_Nm_per_rad,
-                   self.support_bearing_radial_stiffness_N_per_m, self.involute_mesh_mean_stiffness_N_per_m,
+                   sb.stiffness_N_per_m, self.involute_mesh_mean_stiffness_N_per_m,
                    self.turning_arm.law_k_N_per_m_pow, *pc.law_k_N_per_m_pow]
         if not all(np.isfinite(v) and v > 0 for v in scalars):
             raise StiffnessError(f"{where}: every stiffness must be finite and positive")
+        if cb.compliance_m_per_N.shape != (2, 2) or cb.journal_force.shape != (2, 2):
+            raise StiffnessError(f"{where}: crank_bending needs (2, 2) compliance and journal_force "
+                                 f"(two eccentrics, two journals)")
+        Cc = self.carrier.compliance_m_per_N
+        if Cc.ndim != 2 or Cc.shape[0] != Cc.shape[1] or Cc.shape[0] % 4:
+            raise StiffnessError(f"{where}: carrier.compliance_m_per_N has shape {Cc.shape}, expected (4 nc, 4 nc)")
+        for name, M in (("crank_bending", cb.compliance_m_per_N), ("carrier", Cc)):
+            if not np.all(np.isfinite(M)) or np.linalg.eigvalsh(0.5 * (M + M.T)).min() < -1e-9 * np.abs(M).max():
+                raise StiffnessError(f"{where}: {name} compliance must be finite, symmetric positive semidefinite")
+        if not (np.isfinite(ps.disc_body_compliance_m_per_N) and ps.disc_body_compliance_m_per_N >= 0):
+            raise StiffnessError(f"{where}: pin_series.disc_body_compliance_m_per_N must be finite and >= 0")
+        for name, a in (("support_bearings.load_N", sb.load_N), ("pin_series.groove_load_N", ps.groove_load_N)):
+            if len(a) < 2 or np.any(np.diff(a) <= 0) or a[0] <= 0:
+                raise StiffnessError(f"{where}: {name} must be >= 2 increasing positive loads")
+        if np.any(ps.groove_approach_m <= 0) or np.any(np.diff(ps.groove_approach_m) <= 0):
+            raise StiffnessError(f"{where}: pin_series.groove_approach_m must be positive and increasing")
+
+
+def _support_bearings(d: dict) -> SupportBearings:
+    return SupportBearings(str(d["designation"]), int(d["roller_count"]), float(d["roller_length_m"]),
+                           float(d["roller_diameter_m"]), float(d["contact_angle_deg"]), float(d["preload_N"]),
+                           np.asarray(d["load_N"], float), np.asarray(d["deflection_m"], float),
+                           float(d["operating_load_N"]), float(d["stiffness_N_per_m"]))
+
+
+# ----------------------------------------------------------------------------- composition
+SEAT_OF_JOURNAL = (1, 0)   # journal J1 (end-plate side) -> carrier seat 1, J2 (flange side) -> seat 0
+
+
+def seat_transfer(model: StiffnessModel, n_crank: int) -> np.ndarray:
+    """(4 nc, 2 nc nd) seat forces (crank j, seat (flange, end plate), x, y) per eccentric force
+    (crank j, disc plane d, x, y): the crank a beam pinned at its bearing centres (statics)."""
+    P = model.crank_bending.journal_force          # (journal s, eccentric d)
+    nd = P.shape[1]
+    T = np.zeros((4 * n_crank, 2 * n_crank * nd))
+    for j in range(n_crank):
+        for s in range(2):
+            for d in range(nd):
+                for c in range(2):
+                    T[4 * j + 2 * SEAT_OF_JOURNAL[s] + c, 2 * (j * nd + d) + c] = P[s, d]
+    return T
+
+
+def support_compliance_parts(model: StiffnessModel, n_crank: int) -> dict:
+    """The crank support path as compliances between the eccentric forces and the crank axis
+    displacement at each disc plane (crank j, plane d, x, y; carrier frame), one matrix per
+    component, summing to the path's compliance (loads reach the carrier through the bearings):
+      crank_bending     shaft alone, pinned at the bearing centres (isotropic: x and y alike);
+      support_bearings  T^T (1/k_b) T, each bearing an isotropic radial spring at its seat;
+      carrier           T^T C_car T, the seats' flexibility (racking couples the cranks)."""
+    Cb = model.crank_bending.compliance_m_per_N
+    nd = Cb.shape[0]
+    n = 2 * n_crank * nd
+    if model.carrier.compliance_m_per_N.shape != (4 * n_crank, 4 * n_crank):
+        raise StiffnessError(f"carrier compliance has shape {model.carrier.compliance_m_per_N.shape}: "
+                             f"expected ({4 * n_crank}, {4 * n_crank}) for {n_crank} cranks")
+    T = seat_transfer(model, n_crank)
+    bend = np.zeros((n, n))
+    for j in range(n_crank):
+        s = slice(2 * nd * j, 2 * nd * (j + 1))
+        bend[s, s] = np.kron(0.5 * (Cb + Cb.T), np.eye(2))
+    return {"crank_bending": bend,
+            "support_bearings": T.T @ T / model.support_bearings.stiffness_N_per_m,
+            "carrier": T.T @ model.carrier.compliance_m_per_N @ T}
+
+
+def support_stiffness_matrix(model: StiffnessModel, n_crank: int) -> np.ndarray:
+    """Inverse of the summed support compliance (symmetric positive definite)."""
+    C = sum(support_compliance_parts(model, n_crank).values())
+    K = np.linalg.inv(0.5 * (C + C.T))
+    return 0.5 * (K + K.T)
+
+
+def pin_series_tangents(model: StiffnessModel, force_N, law_k, law_n) -> dict:
+    """Tangent compliances d(approach)/dF [m/N] of the parts in series at one cycloid-pin contact."""
+    F = np.maximum(np.asarray(force_N, float), 1e-9)
+    ps = model.pin_series
+    dF = 1e-3 * F
+    return {"pin_contact": F ** (1.0 / law_n - 1.0) / (law_n * law_k ** (1.0 / law_n)),
+            "disc_body": np.full_like(F, ps.disc_body_compliance_m_per_N),
+            "pin_groove": (ps.groove_m(F + dF) - ps.groove_m(F - dF)) / (2 * dF)}
+
+
+def pin_law(model: StiffnessModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The cycloid-pin law the lumped model uses, per pin phase: F = k a^n refitted (log-log least
+    squares over the tabulated loads) to the total approach tooth pair FE + disc body + groove.
+    Returns (position_deg, k, n, max relative force error of the refit over the table)."""
+    pc, ps = model.pin_contact, model.pin_series
+    L = pc.load_N
+    total = pc.approach_m + ps.disc_body_compliance_m_per_N * L[None, :] + ps.groove_m(L)[None, :]
+    k, n, err = np.zeros(len(pc.position_deg)), np.zeros(len(pc.position_deg)), np.zeros(len(pc.position_deg))
+    for i, a in enumerate(total):
+        nn, lk = np.polyfit(np.log(a), np.log(L), 1)
+        k[i], n[i] = np.exp(lk), nn
+        err[i] = np.max(np.abs(k[i] * a ** nn / L - 1.0))
+    return pc.position_deg, k, n, err
 
 
 def save(model: StiffnessModel, path: str | Path) -> None:
@@ -220,5 +448,7 @@ def _read_json(path: Path) -> dict:
     return data
 
 
-__all__ = ["SCHEMA", "StiffnessModel", "PinContact", "TurningArm", "StiffnessError", "save", "load",
+__all__ = ["SCHEMA", "COMPONENTS", "StiffnessModel", "PinContact", "TurningArm", "SupportBearings",
+           "CrankBending", "CarrierSeats", "PinSeries", "support_compliance_parts", "support_stiffness_matrix",
+           "pin_law", "pin_series_tangents", "StiffnessError", "save", "load",
            "for_case", "path_for_case", "check_made_from"]

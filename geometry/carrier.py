@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 from geometry.artifacts import InputError
 
-# ASSUMED: the crank support bearings are extra-light tapered roller bearings (ISO 355 series
-# 2BD, e.g. 32904: d = 20, D = 37 mm): cup outer radius = 1.85 x the journal (cone bore) radius
+# Drawing default only: cup outer radius = 1.85 x the journal radius (an extra-light series); the FE
+# carrier sizes the seats to the bearing fem.tapered_roller selects (fem.carrier.case_geometry)
 SEAT_TO_JOURNAL_RADIUS = 1.85
 # ASSUMED: a cup backing ring / cover of half a bearing width lies between each bearing and the
 # plate's outer face (cups are held axially), so the plates end beyond the bearings

@@ -20,6 +20,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from geometry import spur
 from geometry.artifacts import InputError
 from geometry.pin_profile import min_convex_radius_mm
 
@@ -75,6 +78,15 @@ class Stage1:
     module_mm: float = _f(0.0)
     face_width_mm: float = _f(0.0)
     pressure_angle_deg: float = _f(10.0, 35.0)
+    # x1 of the sun; the planets get x2 = -x1 (zero-sum: the centre distance, hence the crank
+    # circle, stays m (z1 + z2) / 2); checked against undercut and pointed teeth (geometry.spur)
+    profile_shift: float = _f(-1.0, 1.0, open_lo=False,
+                              why="|x| > 1 module is no practical spur gear: the tooth turns pointed or "
+                                  "deeply undercut")
+
+    @property
+    def planet_profile_shift(self) -> float:
+        return 0.0 - self.profile_shift      # x2 = -x1 (0.0, not -0.0, for an unshifted pair)
 
 
 @dataclass(frozen=True)
@@ -103,7 +115,6 @@ class Crankshaft:
     needle_diameter_mm: float = _f(0.0)
     needle_length_mm: float = _f(0.0)
     needle_count: int = _f(4, open_lo=False)
-    support_bearing_stiffness_N_per_um: float = _f(0.0)   # radial, per bearing (catalog/assumed)
 
 
 @dataclass(frozen=True)
@@ -118,7 +129,10 @@ class Material:
 class Operation:
     input_speed_rpm: float = _f(0.0)
     rated_torque_Nm: float = _f(0.0)
+    momentary_torque_Nm: float = _f(0.0)        # catalog momentary maximum: the FE tables' range
     rated_output_speed_rpm: float = _f(0.0)
+    # what the predicted rigidity is set beside (catalog or bench; 0: none); never fed to the model
+    reference_rigidity_Nm_per_arcmin: float = _f(0.0, open_lo=False, default=0.0)
 
 
 @dataclass(frozen=True)
@@ -128,30 +142,126 @@ class Dynamics:
     input_inertia_kg_m2: float = _f(0.0)                  # motor + sun shaft
 
 
+# Limits of the as-built errors: an error beyond them is a wrong or mis-assembled part, not a
+# tolerance (ISO 1328 grade 12, the coarsest, allows ~100 um of cumulative pitch on a 130 mm gear)
+ERROR_UM_MAX = 100.0
+ANGLE_ERROR_ARCMIN_MAX = 60.0
+LOBE_ROWS_MAX = 16                # Fourier lobes per pattern (a measured pattern needs a few)
+STIFFNESS_FACTOR_MIN = 0.1        # a pin support below a tenth of its law is a broken groove
+
+
+def _rows(*columns) -> Any:
+    """A table of rows [column, ...] (TOML array of arrays): columns (name, whole?, lo, hi), closed."""
+    return field(default=(), metadata={"columns": columns})
+
+
+_LOBE = (("amplitude_um", False, 0.0, ERROR_UM_MAX), ("phase_deg", False, -360.0, 360.0))
+
+
 @dataclass(frozen=True)
 class Errors:
-    """Manufacturing/assembly error sources; zero means ideal. Tuples are per crankshaft."""
+    """As-built error sources (DESIGN.md "An as-built reducer"); zero or empty means ideal. Each
+    acts through the contact mechanics of the coupling that reads it (dynamics.couplings.needle:
+    crank, hole and main-bearing errors; .pin: pin and disc errors; .support: support clearance),
+    never as an added TE curve; output_coaxiality_um is the one reading error (dynamics.reducer).
+    Per crank: one value (all cranks) or one per crank j (seat at 360 j / n deg on the carrier).
+    Per pin: empty or zp values, pin k at 360 k / zp deg. Per disc: one value or one per disc.
+    Lobes (rows [m, amplitude, phase_deg]): amplitude cos(m theta - phase) at the pin angle theta;
+    disc lobes (rows [disc, m, amplitude_um, phase_deg], disc 1-based) at the polar angle theta
+    in that disc's own profile frame (disc 2's turned 180 deg)."""
+    # --- cranks, holes, main bearing (needle.py)
     crank_eccentricity_um: tuple = _f(-500.0, 500.0, default=(0.0,))   # both eccentrics of crank j
     # error of the eccentric under disc 1 only (e.g. a grinding error of one eccentric journal):
     # disc 1's eccentric radius on crank j is E + crank_eccentricity_um[j] + eccentric_error_um[j],
     # disc 2's stays E + crank_eccentricity_um[j]; unlike crank_eccentricity_um it does not cancel
     # between the two discs and puts a line at the crankshaft order zp x in the TE
     eccentric_error_um: tuple = _f(-500.0, 500.0, default=(0.0,))
-    crank_hole_position_um: tuple = _f(-500.0, 500.0, default=(0.0,))
-    output_bearing_hole_um: tuple = _f(-500.0, 500.0, default=(0.0,))
+    # angle between crank j's two eccentrics minus 180 deg (disc 2's eccentric turned, + forward)
+    eccentric_phase_arcmin: tuple = _f(-ANGLE_ERROR_ARCMIN_MAX, ANGLE_ERROR_ARCMIN_MAX, open_lo=False,
+                                       default=(0.0,))
+    # timing: crank j's eccentrics turned against its planet gear (spline/key indexing), + forward
+    crank_timing_arcmin: tuple = _f(-ANGLE_ERROR_ARCMIN_MAX, ANGLE_ERROR_ARCMIN_MAX, open_lo=False,
+                                    default=(0.0,))
+    crank_hole_position_um: tuple = _f(-500.0, 500.0, default=(0.0,))     # radial, both discs
+    crank_hole_tangential_um: tuple = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=(0.0,))
+    output_bearing_hole_um: tuple = _f(-500.0, 500.0, default=(0.0,))     # radial, crank seat in the carrier
+    output_bearing_hole_tangential_um: tuple = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=(0.0,))
+    # radial runout of the main (output) bearing that turns with the carrier: the carrier axis,
+    # and with it every crank seat, displaced by this much at the phase from crank 1's seat
+    main_bearing_runout_um: float = _f(0.0, ERROR_UM_MAX, open_lo=False, default=0.0)
+    main_bearing_runout_phase_deg: float = _f(-360.0, 360.0, default=0.0)
+    # --- pins (pin.py): uniform, per pin, pin-ring lobes
     pin_radius_um: float = _f(-500.0, 500.0, default=0.0)
     pin_circle_radius_um: float = _f(-500.0, 500.0, default=0.0)
-    output_coaxiality_um: float = _f(0.0, 1000.0, open_lo=False, default=0.0)
+    per_pin_radial_um: tuple = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=())
+    per_pin_tangential_um: tuple = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=())  # + forward
+    per_pin_radius_um: tuple = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=())
+    pin_radial_lobes: tuple = _rows(("m", True, 1, None), *_LOBE)
+    # pin support (housing groove) stiffness: each pin's law multiplied by 1 + sum a cos(m theta - phase)
+    pin_stiffness_lobes: tuple = _rows(("m", True, 1, None), ("amplitude", False, 0.0, 0.9),
+                                       ("phase_deg", False, -360.0, 360.0))
+    # --- discs (pin.py)
+    disc_phase_um: float = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=0.0)  # disc 2 turned, at R
+    disc_profile_um: tuple = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=(0.0,))  # + material added
+    # cumulative pitch: the teeth turned by amplitude / R (tangential at the pin circle R, + forward);
+    # one lobe (m = 1) is the disc's cumulative pitch error, F_p = 2 amplitude
+    disc_pitch_lobes: tuple = _rows(("disc", True, 1, None), ("m", True, 1, None), *_LOBE)
+    disc_profile_lobes: tuple = _rows(("disc", True, 1, None), ("m", True, 1, None), *_LOBE)  # normal, + material
+    # --- reading error and clearances
+    output_coaxiality_um: float = _f(0.0, 1000.0, open_lo=False, default=0.0)   # encoder/mounting runout
     output_coaxiality_phase_deg: float = _f(-360.0, 360.0, default=0.0)
     turning_arm_clearance_um: float = _f(0.0, 200.0, open_lo=False, default=0.0)
     support_clearance_um: float = _f(0.0, 200.0, open_lo=False, default=0.0)
 
 
+TOLERANCE_UM_MAX = ERROR_UM_MAX / 2   # the difference of two draws (e.g. two eccentrics) stays an error
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Tolerance bands of the as-built Monte Carlo (`tolerance --model full`, dynamics.tolerance),
+    um: +- half-width of a symmetric band (uniform, or normal with band = 3 sigma), or a maximum
+    (clearances, runouts, lobe amplitudes: uniform in [0, max], phase uniform). Defaults: an
+    RV-40E-sized precision reducer; the grade each stands for is in the comment. Only the
+    tolerance stage reads them: they are left out of the case fingerprint (ReducerCase.to_dict),
+    so a band change does not make the FE stale; the tolerance artifacts record the bands."""
+    # each eccentric centre, radial and tangential: ISO 286 IT5 at <= 3 mm (the eccentricity) = 4 um
+    eccentricity_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=2.0)
+    # crank timing at the planet pitch circle: ISO 1328-1 grade 5 single pitch f_pt (m 2, d 48: 5.5 um)
+    crank_timing_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=5.5)
+    # disc crank holes, carrier crank seats, radial and tangential: ISO 286 IT5 at 30-50 mm = 11 um
+    crank_hole_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=5.5)
+    bearing_hole_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=5.5)
+    # each pin's groove, radial and tangential: half ISO 1328-1 grade 5 f_pt of the pin ring read as
+    # an internal gear (m 3.2, d 128: 6.3 um), so neighbouring pins differ by up to f_pt
+    pin_position_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=3.0)
+    # each pin's radius: ISO 3096 grade G2 rollers (2 um diameter variation in a lot)
+    pin_radius_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=0.5)
+    # max amplitude of each pin-ring lobe m = 1..4 (radial): housing roundness, ASSUMED IT3 at
+    # 120-180 mm (5 um) shared by the lobes, a P5 bearing seat's form grade
+    pin_ring_lobes_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=1.2)
+    # max 1-lobe cumulative pitch amplitude per disc: ISO 1328-1 grade 5 F_p (m 3.2, d 128: 22 um) / 2
+    disc_pitch_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=11.0)
+    # each disc's profile (material +-): ASSUMED half the grade 5 profile form f_f_alpha (~7 um)
+    disc_profile_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=3.5)
+    # disc 2 against disc 1 at R: ASSUMED, discs ground as a stacked pair (one f_pt / 3)
+    disc_phase_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=2.0)
+    # max radial clearances: needle bearing ASSUMED C2-class (0-5 um), preloaded tapered supports 0-2 um
+    turning_arm_clearance_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=5.0)
+    support_clearance_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=2.0)
+    # max main-bearing runout (eccentricity): ISO 492 class 5 inner ring K_ia (d 80-120: 5 um) / 2
+    main_bearing_runout_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=2.5)
+    # max encoder/mounting eccentricity on the bench (a reading, not the reducer): ASSUMED a
+    # dial-indicated mount, 20 um TIR
+    output_coaxiality_um: float = _f(0.0, TOLERANCE_UM_MAX, open_lo=False, default=10.0)
+
+
 SECTIONS: dict[str, type] = {
     "cycloid": Cycloid, "modification": Modification, "stage1": Stage1, "carrier": Carrier,
     "disc": Disc, "crankshaft": Crankshaft, "material": Material, "operation": Operation,
-    "dynamics": Dynamics, "errors": Errors,
+    "dynamics": Dynamics, "errors": Errors, "tolerances": Tolerances,
 }
+OPTIONAL_SECTIONS = ("errors", "tolerances")
 
 
 @dataclass(frozen=True)
@@ -167,6 +277,7 @@ class ReducerCase:
     operation: Operation
     dynamics: Dynamics
     errors: Errors = Errors()
+    tolerances: Tolerances = Tolerances()
     source: str = ""   # path the case was read from, for messages
 
     @property
@@ -195,7 +306,8 @@ class ReducerCase:
         return out
 
     def to_dict(self) -> dict:
-        return {k: v for k, v in dataclasses.asdict(self).items() if k != "source"}
+        """The content the case fingerprint hashes: every section but `tolerances` (see Tolerances)."""
+        return {k: v for k, v in dataclasses.asdict(self).items() if k not in ("source", "tolerances")}
 
 
 def _where(section: str, key: str, source: str) -> str:
@@ -216,7 +328,8 @@ def _build(cls: type, data: dict, section: str, source: str) -> Any:
             if f.default is dataclasses.MISSING:
                 raise CaseError(f"{_where(section, name, source)}: missing (required)")
             continue
-        values[name] = _check_value(f, data[name], _where(section, name, source))
+        check = _check_rows if "columns" in f.metadata else _check_value
+        values[name] = check(f, data[name], _where(section, name, source))
     return cls(**values)
 
 
@@ -245,14 +358,77 @@ def _check_value(f: dataclasses.Field, value: Any, where: str) -> Any:
     return tuple(checked) if want_tuple else checked[0]
 
 
+def _check_rows(f: dataclasses.Field, value: Any, where: str) -> tuple:
+    """A table of rows (f.metadata["columns"]: (name, whole?, lo, hi), closed) -> tuple of tuples."""
+    cols = f.metadata["columns"]
+    shape = "[" + ", ".join(c[0] for c in cols) + "]"
+    if not isinstance(value, (list, tuple)) or any(not isinstance(r, (list, tuple)) for r in value):
+        raise CaseError(f"{where} = {value!r}: must be a list of rows {shape}, e.g. "
+                        f"[{', '.join('1' for _ in cols)}]")
+    if len(value) > LOBE_ROWS_MAX:
+        raise CaseError(f"{where}: {len(value)} rows; allowed at most {LOBE_ROWS_MAX}")
+    rows = []
+    for i, row in enumerate(value, 1):
+        if len(row) != len(cols):
+            raise CaseError(f"{where} row {i} = {list(row)!r}: needs {len(cols)} numbers {shape}")
+        out = []
+        for (name, whole, lo, hi), v in zip(cols, row):
+            here = f"{where} row {i} {name}"
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise CaseError(f"{here} = {v!r}: must be a finite number")
+            if whole and not float(v).is_integer():
+                raise CaseError(f"{here} = {v!r}: must be a whole number")
+            if (lo is not None and v < lo) or (hi is not None and v > hi):
+                raise CaseError(f"{here} = {v!r}: outside the allowed range [{lo}, "
+                                f"{hi if hi is not None else 'inf'}]")
+            out.append(int(v) if whole else float(v))
+        rows.append(tuple(out))
+    return tuple(rows)
+
+
+def lobe_sum(rows, m_col: int, theta):
+    """sum over rows of amplitude cos(m theta - phase) (amplitude, phase_deg after column m_col)."""
+    return sum(r[m_col + 1] * np.cos(r[m_col] * theta - np.radians(r[m_col + 2])) for r in rows)
+
+
 def _check_errors(case: ReducerCase) -> None:
-    n = case.carrier.crank_count
-    for key in ("crank_eccentricity_um", "eccentric_error_um", "crank_hole_position_um",
-                "output_bearing_hole_um"):
-        v = getattr(case.errors, key)
-        if len(v) not in (1, n):
-            raise CaseError(f"{_where('errors', key, case.source)} = {list(v)}: give one value "
-                            f"(all cranks) or {n} (one per crank)")
+    er, n, nd, zp, zc = case.errors, case.carrier.crank_count, case.cycloid.disc_count, case.cycloid.zp, \
+        case.cycloid.zc
+    w = lambda key: _where("errors", key, case.source)  # noqa: E731
+    for key in ("crank_eccentricity_um", "eccentric_error_um", "eccentric_phase_arcmin", "crank_timing_arcmin",
+                "crank_hole_position_um", "crank_hole_tangential_um", "output_bearing_hole_um",
+                "output_bearing_hole_tangential_um"):
+        if len(getattr(er, key)) not in (1, n):
+            raise CaseError(f"{w(key)} = {list(getattr(er, key))}: give one value (all cranks) or {n} "
+                            f"(one per crank)")
+    for key in ("per_pin_radial_um", "per_pin_tangential_um", "per_pin_radius_um"):
+        if len(getattr(er, key)) not in (0, zp):
+            raise CaseError(f"{w(key)}: {len(getattr(er, key))} values; give none or zp = {zp} (pin k "
+                            f"at 360 k / zp deg)")
+    if len(er.disc_profile_um) not in (1, nd):
+        raise CaseError(f"{w('disc_profile_um')} = {list(er.disc_profile_um)}: give one value (all discs) "
+                        f"or {nd} (one per disc)")
+    if nd == 1:
+        for key in ("disc_phase_um", "eccentric_phase_arcmin"):
+            if any(v != 0 for v in np.atleast_1d(getattr(er, key))):
+                raise CaseError(f"{w(key)} = {getattr(er, key)}: acts between two discs; this case has "
+                                f"disc_count = 1 (allowed 0)")
+    # lobes beyond half the pins (teeth) alias onto fewer lobes of the same points
+    for key, m_col, top, what in (("pin_radial_lobes", 0, zp // 2, "zp / 2"), ("pin_stiffness_lobes", 0, zp // 2, "zp / 2"),
+                                  ("disc_pitch_lobes", 1, zc // 2, "zc / 2"),
+                                  ("disc_profile_lobes", 1, zc // 2, "zc / 2")):
+        for i, r in enumerate(getattr(er, key), 1):
+            if r[m_col] > top:
+                raise CaseError(f"{w(key)} row {i} m = {r[m_col]}: allowed 1 to {what} = {top} (more lobes "
+                                f"than half the {'pins' if m_col == 0 else 'teeth'} alias onto fewer)")
+            if m_col == 1 and r[0] > nd:
+                raise CaseError(f"{w(key)} row {i} disc = {r[0]}: allowed 1 to {nd} (disc_count)")
+    factor = 1.0 + lobe_sum(er.pin_stiffness_lobes, 0, 2 * np.pi * np.arange(zp) / zp)
+    if np.min(factor) < STIFFNESS_FACTOR_MIN:
+        raise CaseError(f"{w('pin_stiffness_lobes')} = {[list(r) for r in er.pin_stiffness_lobes]}: the "
+                        f"support stiffness factor falls to {np.min(factor):.3g} at pin "
+                        f"{int(np.argmin(factor)) + 1}; allowed >= {STIFFNESS_FACTOR_MIN} at every pin "
+                        f"(lower the amplitudes)")
 
 
 def validate(case: ReducerCase) -> ReducerCase:
@@ -303,9 +479,38 @@ def validate(case: ReducerCase) -> ReducerCase:
         raise CaseError(f"{w('disc', 'centre_hole_radius_mm')} = {case.disc.centre_hole_radius_mm}: "
                         f"cuts into the crank holes (allowed < "
                         f"{cr.crank_circle_radius_mm - case.disc.crank_hole_radius_mm:g} mm)")
+    op = case.operation
+    if op.momentary_torque_Nm <= op.rated_torque_Nm:
+        raise CaseError(f"{w('operation', 'momentary_torque_Nm')} = {op.momentary_torque_Nm:g}: the momentary "
+                        f"maximum must exceed the rated torque ({op.rated_torque_Nm:g} N m); allowed > "
+                        f"{op.rated_torque_Nm:g}")
     _check_errors(case)
     _check_undercut(case)
+    _check_stage1(case)
     return case
+
+
+def _check_stage1(case: ReducerCase) -> None:
+    """Sun and planets cut by the ISO 53 rack: neither undercut nor pointed (geometry.spur), and
+    at least one pair always in mesh."""
+    s1, where = case.stage1, _where("stage1", "profile_shift", case.source)
+    x, z1, z2, al = s1.profile_shift, s1.z1, s1.z2, s1.pressure_angle_deg
+    lo, hi = spur.shift_range(z1, z2, al)
+    if lo > hi:
+        raise CaseError(f"{_where('stage1', 'z1', case.source)} = {z1}: no profile shift frees the z1 = {z1} "
+                        f"sun and z2 = {z2} planets from undercut and pointed teeth at {al:g} deg "
+                        f"(needs x1 >= {lo:.3f} and x1 <= {hi:.3f}); use more teeth or a larger pressure angle")
+    if not lo <= x <= hi:
+        why = (f"the z1 = {z1} sun is undercut below x1 = {spur.undercut_limit(z1, al):.3f} "
+               f"(1.0 - z sin^2(alpha) / 2, ISO 53 rack)" if x < spur.undercut_limit(z1, al) else
+               f"the z2 = {z2} planets (x2 = -x1) are undercut" if x > -spur.undercut_limit(z2, al) else
+               f"a tooth tip is thinner than {spur.TIP_MIN_OF_MODULE:g} module (pointed)")
+        raise CaseError(f"{where} = {x!r}: {why}; allowed x1 in [{lo:.3f}, {hi:.3f}] "
+                        f"(the planets get x2 = -x1)")
+    eps = spur.transverse_contact_ratio(z1, z2, s1.module_mm, al, x, -x)
+    if eps < 1.0:
+        raise CaseError(f"{where} = {x!r}: transverse contact ratio {eps:.3f} < 1 (the mesh would lose "
+                        f"contact between pairs); lower |x1| or use more teeth")
 
 
 def _check_undercut(case: ReducerCase) -> None:
@@ -363,7 +568,7 @@ def case_from_dict(raw: dict, source: str = "") -> ReducerCase:
                         f"names the build folder")
     sections = {}
     for sec, cls in SECTIONS.items():
-        if sec not in raw and sec != "errors":
+        if sec not in raw and sec not in OPTIONAL_SECTIONS:
             raise CaseError(f"{_where(sec, '', source)}: missing section")
         sections[sec] = _build(cls, raw.get(sec, {}), sec, source)
     return validate(ReducerCase(name=name, source=source, **sections))

@@ -26,7 +26,9 @@ COMMANDS = {
     "hysteresis": ("pipeline.cmd_dynamics", "catalog test: rigidity, lost motion, backlash"),
     "fourbar": ("pipeline.cmd_fourbar", "paper 000's four-bar original-error analysis"),
     "tolerance": ("pipeline.cmd_fourbar", "Monte Carlo tolerance analysis (local or Dask)"),
+    "signatures": ("pipeline.cmd_signatures", "as-built error atlas: each error source alone through the model"),
     "diagnose": ("pipeline.cmd_diagnose", "measured records -> causes, extension, gain"),
+    "compensate": ("pipeline.cmd_compensate", "diagnosis' extended model -> TE compensation table, checked on records"),
     "paper001": ("pipeline.cmd_diagnose", "paper 001's no-load bench case: coaxiality that closes the gap"),
     "report": ("pipeline.cmd_report", "static HTML report of a case"),
 }

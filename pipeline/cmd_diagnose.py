@@ -2,8 +2,14 @@
 
 Writes DIR/diagnosis.json (DESIGN.md keys) and DIR/index.html. Stiffness defaults to
 build/<case.name>/fem/stiffness.json. `--columns NAME=SOURCE,...` (and `--no-header`) read records
-with other column names or none; nothing is guessed. Progress (one tick per record simulated
-through the model, on stderr) and a one-line summary (stdout) are shown unless --quiet.
+with other column names or none; nothing is guessed. A file whose motion reverses (forward then
+backward) is split into one record per direction (dynamics.records.read_records). Records are
+checked against the case before any fitting (pipeline.diagnosis.inputs: a refused record is one
+`error:` line, exit 2). `--holdout R ...`: records never used to name or fit a cause; holdout_gain is computed on exactly
+them. Progress (one tick per record simulated through the model, on stderr, only on a terminal),
+the diagnosis notes (input repairs, causes not reported and why, residual left unexplained; one
+`note:` line each on stderr, also in index.html) and a one-line summary (stdout) are shown unless
+--quiet.
 """
 from __future__ import annotations
 
@@ -22,6 +28,8 @@ def register(sub) -> None:
     p = sub.add_parser("diagnose", help="diagnose bench records against the model")
     p.add_argument("--case", required=True)
     p.add_argument("--measured", required=True, nargs="+")
+    p.add_argument("--holdout", nargs="+", default=None,
+                   help="records never used to name or fit a cause; the hold-out gain is computed on exactly them")
     p.add_argument("--out", required=True)
     p.add_argument("--stiffness", default=None, help="stiffness.json (default build/<case>/fem/stiffness.json)")
     p.add_argument("--columns", default=None, help="column map NAME=SOURCE,... (SOURCE a name or 0-based index)")
@@ -78,25 +86,40 @@ def run(args) -> int:
     from pipeline.diagnosis.diagnose import diagnose
     from pipeline.diagnosis.report import write_report
     from pipeline.diagnosis.simulate import quasi_static_te
-    from dynamics.records import parse_column_map, read_record
+    from dynamics.records import parse_column_map, read_records
     stiffness = for_case(case, args.stiffness)
     cols = parse_column_map(args.columns) if args.columns else None
-    records = [read_record(p, cols, header=not args.no_header) for p in args.measured]
+    _check_holdout(args.measured, args.holdout)
+    records = [r for p in args.measured for r in read_records(p, cols, header=not args.no_header)]
+    held = [r for p in (args.holdout or []) for r in read_records(p, cols, header=not args.no_header)]
+    holdout = tuple(range(len(records), len(records) + len(held))) if args.holdout else None
+    records += held
     te_model, bar = quasi_static_te, None
-    if not args.quiet:
+    if not args.quiet and sys.stderr.isatty():   # a bar in a log file is one line of carriage returns
         from tqdm import tqdm
         bar = tqdm(desc="diagnose", unit=" record sims", file=sys.stderr)
         te_model = _ticking(quasi_static_te, bar)
     try:
-        diag = diagnose(case, stiffness, records, te_model, points_per_rev=args.points_per_rev)
+        diag = diagnose(case, stiffness, records, te_model, points_per_rev=args.points_per_rev,
+                        holdout_records=holdout)
     finally:
         if bar is not None:
             bar.close()
-    _add_made_from(Path(args.out) / "diagnosis.json", case, stiffness, args.measured)  # before the target
+    _add_made_from(Path(args.out) / "diagnosis.json", case, stiffness, args.measured + (args.holdout or []))
     out = write_report(diag, case, args.out)
     if not args.quiet:
+        for note in diag.notes:
+            print(f"note: {note}", file=sys.stderr)
         print(summary_line(diag, out))
     return 0
+
+
+def _check_holdout(measured: list[str], holdout: list[str] | None) -> None:
+    """A held-out record is not also a fitted one (the same file given to both options)."""
+    both = {str(Path(p).resolve()) for p in measured} & {str(Path(p).resolve()) for p in holdout or []}
+    if both:
+        raise DiagnoseError(f"--holdout {', '.join(sorted(both))}: also given to --measured; a held-out "
+                            f"record is never fitted, give it to one option only")
 
 
 def _add_made_from(path: Path, case, stiffness, records: list[str]) -> None:

@@ -33,7 +33,7 @@ def register(sub) -> None:
                    help="element size at the contact [mm] (default: 1/12 of the smallest Hertz half-width)")
     p.add_argument("--mesh", default=None, help="folder of the mesh stage (crankshaft_mesh.npz) to reuse")
     p.add_argument("--workers", type=int, default=1,
-                   help="local processes for the independent FE problems (tooth map, crankshaft, bearing)")
+                   help="local processes for the independent FE problems (tooth map, crankshaft, carrier, ...)")
     p.add_argument("--scheduler", default=None, help="Dask scheduler address (runs the FE problems there)")
     p.add_argument("--radius-mm", type=float)
     p.add_argument("--width-mm", type=float)
@@ -124,14 +124,24 @@ def _case(args, out: Path) -> int:
     _write_meshes(runres, out)
     _pictures(runres, out)
     if not args.quiet:
-        m = runres.model
-        k = m.extras["tooth_secant_stiffness_at_rated_N_per_m"]
-        print(f"fem {case.name}: {len(m.pin_contact.position_deg)} positions x {len(m.pin_contact.load_N)} loads; "
-              f"tooth stiffness at rated load {min(k) / 1e6:.0f}..{max(k) / 1e6:.0f} N/um; crankshaft "
-              f"{m.crankshaft_bending_stiffness_N_per_m / 1e6:.0f} N/um, "
-              f"{m.crankshaft_torsional_stiffness_Nm_per_rad:.0f} N m/rad; {time.perf_counter() - t0:.0f} s "
-              f"-> {out / 'stiffness.json'}")
+        print(summary_line(runres.model, time.perf_counter() - t0, out / "stiffness.json"))
     return 0
+
+
+def summary_line(m, seconds: float, path) -> str:
+    """The stage's console line: the new figures of each part of the compliance path, briefly."""
+    k = m.extras["tooth_secant_stiffness_at_rated_N_per_m"]
+    sb, C = m.support_bearings, m.crank_bending.compliance_m_per_N
+    ch = m.checks
+    return (f"fem {m.case_name}: {len(m.pin_contact.position_deg)} positions x {len(m.pin_contact.load_N)} loads "
+            f"(to {m.pin_contact.load_N[-1]:.0f} N); tooth {min(k) / 1e6:.0f}..{max(k) / 1e6:.0f} N/um at rated; "
+            f"support {sb.designation} Z {sb.roller_count}, {sb.stiffness_N_per_m / 1e6:.0f} N/um at "
+            f"{sb.operating_load_N:.0f} N (preload {sb.preload_N:.0f} N); crank C11 {C[0, 0] * 1e9:.2f}, "
+            f"C12 {C[0, 1] * 1e9:.2f} nm/N (FE/beam {ch['crank_bending']['fe_over_beam_C11']:.2f}); carrier "
+            f"{ch['carrier']['torsional_stiffness_Nm_per_arcmin']:.0f} N m/arcmin; disc body "
+            f"{1e-6 / m.pin_series.disc_body_compliance_m_per_N:.0f} N/um per pin; groove "
+            f"{ch['pin_groove']['tangent_at_rated_N_per_m'] / 1e6:.0f} N/um at rated; crank torsion "
+            f"{m.crankshaft_torsional_stiffness_Nm_per_rad:.0f} N m/rad; {seconds:.0f} s -> {path}")
 
 
 def _write_meshes(runres, out: Path) -> None:
@@ -170,7 +180,8 @@ def _pictures(runres, out: Path) -> None:
     p = render.plotter()
     p.add_mesh(disc, scalars="von Mises [MPa]", cmap="turbo", clim=[0, float(np.percentile(vm, 99.9)) / 1e6])
     p.add_mesh(pin, style="wireframe", color="gray", line_width=0.3)
-    centre = snap["centre_m"] * 1e3 - snap["normal"] * 3.0
+    r_pin_mm = float(np.max(np.linalg.norm(pin_pts, axis=1))) * 1e3    # this case's pin, not the RV-40E's 3 mm
+    centre = snap["centre_m"] * 1e3 - snap["normal"] * r_pin_mm
     p.add_text(f"contact stress at {snap['position_deg']:.0f} deg, {snap['load_N']:.0f} N", font_size=10, color="black")
     p.view_xy()
     p.camera.focal_point = (*centre[:2], 0.0)

@@ -1,11 +1,12 @@
 """`fourbar` and `tolerance` commands: paper 000's four-bar original-error model and its Monte Carlo.
 
     python -m pipeline fourbar --case CASE.toml --out DIR [--stiffness PATH]
-    python -m pipeline tolerance --case CASE.toml --samples N [--scheduler ADDRESS] [--seed S] --out DIR
+    python -m pipeline tolerance --case CASE.toml --samples N [--model fourbar|full] [--seed S] [--scheduler ADDRESS] --out DIR
 
 Forces come from the project's load-sharing solution (dynamics.model.solve_static) when that module
 is present, else from a statics estimate (dynamics.fourbar.statics_pair_loads); every artifact says
-which. Compliance comes from stiffness.json (default build/<case>/fem/stiffness.json).
+which. Compliance comes from stiffness.json (default build/<case>/fem/stiffness.json). `--model full`
+runs dynamics.tolerance.full_monte_carlo (the lumped model; artifacts: pipeline.tolerance_full).
 """
 from __future__ import annotations
 
@@ -251,7 +252,7 @@ def comparison_md(case, geom, loads, base, dev, singles, pairs, paper72, scan, a
       "a 'best bias' on |elastic| is a bias that cancels part of that windup at this one crank angle.")
     w("\n## Pairs of error sources (surfaces: surface_<a>_<b>.png)\n")
     w("| pair | paper rigid (°) | paper elastic (°) | paper best bias | ours rigid (arcsec) | ours elastic "
-      "(arcsec) | our best (a, b) for |elastic| |")
+      "(arcsec) | our best (a, b) for \\|elastic\\| |")   # escaped bars: not cell borders
     w("|---|---|---|---|---|---|---|")
     for (a, b), sw in pairs.items():
         pr, pe = _paper_rng((a, b))
@@ -292,9 +293,10 @@ def comparison_md(case, geom, loads, base, dev, singles, pairs, paper72, scan, a
           f"{scan[s]['exact_rad'][k90] * A:+.4g} arcsec at 90 deg and {scan[s]['exact_rad'][k270] * A:+.4g} "
           f"at 270 deg; best bias rigid / elastic: {fb.best_bias(dev, sw.rigid_rad)} / "
           f"{fb.best_bias(dev, sw.elastic_rad)} (paper: {fb.PAPER_000[s]['bias']}).")
-    w("""
+    per_um = A * 1e-3 / geom.spacing_mm     # |d(out)/d(l1 - l3)| = 1/l2 rad/mm at 90 deg, this case's l2
+    w(f"""
 Guidance: (1) control the crank-to-crank eccentricity spread |l1 - l3| first: it is the only
-first-order source at 90 deg (3.3 arcsec per um here, 1/l4 rad/mm); its sign flips between
+first-order source at 90 deg ({per_um:.2g} arcsec per um here, 1/l2 rad/mm); its sign flips between
 beta1 = 90 and 270 deg, so no bias direction helps over a crank revolution: centre the band and
 narrow it, or match (select) crankshafts in sets. (2) make the disc crank-hole spacing and the
 carrier bearing-hole spacing equal rather than biased: their mismatch l2 - l4 acts through
@@ -357,25 +359,41 @@ def _figures(out: Path, dev, singles, pairs, scan) -> None:
 
 # ---------------------------------------------------------------- tolerance
 
+FOURBAR_BANDS = ("eccentricity_um", "crank_hole_um", "output_hole_um", "turning_arm_clearance_um",
+                 "support_clearance_um")     # the four-bar model's band options (ToleranceBands' fields)
+MAX_FULL_SAMPLES = 100_000                  # ~0.3 s a build: 8 core-hours
+
+
 def bands_from_args(args) -> tol.ToleranceBands:
-    for field in ("eccentricity_um", "crank_hole_um", "output_hole_um", "turning_arm_clearance_um",
-                  "support_clearance_um"):   # named by their options (ToleranceBands names its fields)
+    d = tol.ToleranceBands()
+    for field in FOURBAR_BANDS:             # named by their options
+        if getattr(args, field) is None:
+            setattr(args, field, getattr(d, field))
         _check_range("--" + field.replace("_", "-"), getattr(args, field), 0.0, tol.MAX_BAND_UM)
     return tol.ToleranceBands(args.eccentricity_um, args.crank_hole_um, args.output_hole_um,
                               args.turning_arm_clearance_um, args.support_clearance_um, args.distribution)
 
 
-def run_tolerance(args) -> int:
+def _check_tolerance_args(args, max_samples: int) -> None:
     from pipeline.checks import int_in, number_in
-    from pipeline.sweep import check_scheduler, run_tasks
-    int_in("--samples", args.samples, 1, MAX_SAMPLES)
+    from pipeline.sweep import check_scheduler
+    int_in("--samples", args.samples, 1, max_samples)
     int_in("--seed", args.seed, 0, 2 ** 63 - 1)
     if args.workers is not None:
         int_in("--workers", args.workers, 1, 256, "local processes")
-    int_in("--chunk-size", args.chunk_size, 1, MAX_SAMPLES, "samples per task")
+    if args.chunk_size is not None:
+        int_in("--chunk-size", args.chunk_size, 1, max_samples, "samples per task")
     number_in("--limit-arcsec", args.limit_arcsec, 0.0, MAX_LIMIT_ARCSEC, "arcsec", lo_open=True,
-              why="the output error a good build stays within")
+              why="the output error (four-bar) or TE peak-to-peak (full) a good build stays within")
     check_scheduler(args.scheduler)
+
+
+def run_tolerance(args) -> int:
+    from pipeline.sweep import run_tasks
+    if args.model == "full":
+        return run_tolerance_full(args)
+    _check_tolerance_args(args, MAX_SAMPLES)
+    args.chunk_size = args.chunk_size or 20000
     bands = bands_from_args(args)
     case = load_case(args.case)
     geom, loads, comp = _setup(args, case)
@@ -412,6 +430,49 @@ def run_tolerance(args) -> int:
     return 0
 
 
+def run_tolerance_full(args) -> int:
+    """--model full: builds from the case's [tolerances] through the lumped model (dynamics.tolerance)."""
+    import dataclasses
+    import hashlib
+    import json
+    from dynamics.signatures import points_per_rev
+    from geometry.fingerprint import made_from
+    from pipeline.checks import int_in
+    from pipeline.sweep import run_tasks
+    from pipeline.tolerance_full import write_full
+    _check_tolerance_args(args, MAX_FULL_SAMPLES)
+    given = [f for f in FOURBAR_BANDS if getattr(args, f) is not None]
+    if given:
+        raise InputError(f"--{given[0].replace('_', '-')}: a four-bar band; --model full draws every band "
+                         "from the case's [tolerances] section (set it there)")
+    k = min(args.samples, 20) if args.sensitivity_builds is None else args.sensitivity_builds
+    int_in("--sensitivity-builds", k, 0, MAX_FULL_SAMPLES, "builds per band, each band alone")
+    case = load_case(args.case)
+    tol.check_tolerances(case)
+    torque, _ = _check_load(args, case)
+    stiff = _stiffness(case, args.stiffness)
+    task = tol.FullTask(case, stiff, args.distribution, int(args.seed), torque, points_per_rev(case))
+    runner = functools.partial(run_tasks, workers=args.workers, scheduler=args.scheduler)
+    t0 = time.perf_counter()
+    res = tol.full_monte_carlo(task, args.samples, chunk_size=args.chunk_size or tol.FULL_CHUNK,
+                               sensitivity_builds=k, map_chunks=runner, limit_arcsec=args.limit_arcsec)
+    wall = time.perf_counter() - t0
+    bands = dataclasses.asdict(case.tolerances)
+    band_fp = hashlib.sha256(json.dumps([bands, args.distribution], sort_keys=True).encode()).hexdigest()
+    summary = {"case": case.name, "model": "full",
+               "made_from": made_from(case, "rv-tolerance-full/1", stiffness=stiff.made_from,
+                                      tolerances=band_fp).to_json(),
+               "bands_um": bands, **res.summary(),
+               "runner": f"dask {args.scheduler}" if args.scheduler else f"local processes ({args.workers or 'auto'})"}
+    write_full(Path(args.out), res, summary)
+    top = summary["sensitivity"][0]["band"] if summary["sensitivity"] else "n/a"
+    _say(args, f"tolerance --model full {case.name}: {args.samples} builds (+ {k} per band alone) in {wall:.1f} s; "
+               f"TE p-p within {args.limit_arcsec:g} arcsec: {100 * summary['yield']['te_pp']:.1f} % (bench-read "
+               f"{100 * summary['yield']['bench_te_pp']:.1f} %), lost motion within 1 arcmin: "
+               f"{100 * summary['yield']['lost_motion']:.1f} %; tighten first: {top}")
+    return 0
+
+
 def register(sub) -> None:
     p = sub.add_parser("fourbar", help="paper 000's four-bar original-error model: sweeps, tables, surfaces")
     _add_common(p)
@@ -424,25 +485,32 @@ def register(sub) -> None:
     p.set_defaults(func=run_fourbar)
 
     d = tol.ToleranceBands()
-    q = sub.add_parser("tolerance", help="Monte Carlo tolerance analysis on the four-bar model")
+    q = sub.add_parser("tolerance", help="Monte Carlo tolerance analysis: four-bar model or the full model")
     _add_common(q)
+    q.add_argument("--model", choices=("fourbar", "full"), default="fourbar",
+                   help="fourbar: paper 000's crank pair at one angle (bands from the options below); full: "
+                        "builds from the case's [tolerances] through the lumped model over one output "
+                        "revolution (TE, lost motion, rigidity, sensitivity). Default fourbar")
     q.add_argument("--samples", type=int, required=True, help="number of builds")
     q.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     q.add_argument("--scheduler", default=None, help="Dask scheduler address (default: local processes)")
     q.add_argument("--workers", type=int, default=None, help="local processes (default: all cores)")
-    q.add_argument("--chunk-size", type=int, default=20000,
-                   help="samples per task, rounded up to whole random-stream blocks (default 20000)")
-    q.add_argument("--limit-arcsec", type=float, default=60.0, help="accuracy limit (default 60 = 1 arcmin)")
+    q.add_argument("--chunk-size", type=int, default=None,
+                   help="samples per task (default: fourbar 20000, rounded up to whole random-stream blocks; "
+                        f"full {tol.FULL_CHUNK}, a few seconds of work)")
+    q.add_argument("--sensitivity-builds", type=int, default=None,
+                   help="full: builds per band in the one-band-at-a-time sensitivity (default min(samples, 20))")
+    q.add_argument("--limit-arcsec", type=float, default=60.0,
+                   help="accuracy limit: fourbar output error, full TE peak-to-peak (default 60 = 1 arcmin)")
     q.add_argument("--distribution", choices=tol.DISTRIBUTIONS, default=d.distribution,
-                   help=f"deviation distribution in each band (default {d.distribution}; normal: band = 3 sigma)")
-    q.add_argument("--eccentricity-um", type=float, default=d.eccentricity_um,
-                   help=f"+- band of each crank's eccentricity (default {d.eccentricity_um:g}, IT5-ish)")
-    q.add_argument("--crank-hole-um", type=float, default=d.crank_hole_um,
-                   help=f"+- band of the disc crank-hole spacing (default {d.crank_hole_um:g})")
-    q.add_argument("--output-hole-um", type=float, default=d.output_hole_um,
-                   help=f"+- band of the carrier bearing-hole spacing (default {d.output_hole_um:g})")
-    q.add_argument("--turning-arm-clearance-um", type=float, default=d.turning_arm_clearance_um,
-                   help=f"needle-bearing radial clearance, uniform 0..max (default {d.turning_arm_clearance_um:g})")
-    q.add_argument("--support-clearance-um", type=float, default=d.support_clearance_um,
-                   help=f"support-bearing radial clearance, uniform 0..max (default {d.support_clearance_um:g})")
+                   help=f"deviation distribution in each +- band (default {d.distribution}; normal: band = 3 sigma)")
+    for name, text in (("eccentricity_um", f"+- band of each crank's eccentricity (default {d.eccentricity_um:g}, IT5-ish)"),
+                       ("crank_hole_um", f"+- band of the disc crank-hole spacing (default {d.crank_hole_um:g})"),
+                       ("output_hole_um", f"+- band of the carrier bearing-hole spacing (default {d.output_hole_um:g})"),
+                       ("turning_arm_clearance_um", "needle-bearing radial clearance, uniform 0..max "
+                                                    f"(default {d.turning_arm_clearance_um:g})"),
+                       ("support_clearance_um", "support-bearing radial clearance, uniform 0..max "
+                                                f"(default {d.support_clearance_um:g})")):
+        q.add_argument("--" + name.replace("_", "-"), type=float, default=None,
+                       help=f"fourbar only: {text}; --model full reads the case's [tolerances]")
     q.set_defaults(func=run_tolerance)

@@ -25,7 +25,8 @@ def case_folder(build: str | Path, name: str) -> Path:
 
 def run(args) -> int:
     case = load_case(args.case)
-    path = build_report(case_folder(args.build, case.name), case.name, case_fingerprint(case))
+    path = build_report(case_folder(args.build, case.name), case.name, case_fingerprint(case),
+                        rated_torque_Nm=case.rated_torque_Nm, ratio=case.ratio)
     if not args.quiet:
         print(f"report: {path}")
     return 0

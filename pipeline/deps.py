@@ -46,6 +46,7 @@ STAGES = {
     "simulate": "pipeline.cmd_dynamics:cmd_simulate",
     "fourbar": "pipeline.cmd_fourbar:run_fourbar",
     "tolerance": "pipeline.cmd_fourbar:run_tolerance",
+    "signatures": "pipeline.cmd_signatures:cmd_signatures",
     "diagnosis": "pipeline.cmd_diagnose:run",
     "paper001": "pipeline.cmd_diagnose:run_paper001",
     "report": "pipeline.cmd_report:run",

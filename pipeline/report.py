@@ -1,8 +1,12 @@
 """The case report: one static HTML page over a case's build folder.
 
-The page links the stage artifacts in place (relative paths), so it opens from disk in any browser
-with no server, and it only reads: every figure and table comes from a stage that already wrote it.
-A stage whose artifacts are missing is listed as "not built" instead of failing the report; a JSON
+The page opens on the case's key figures beside their references (pipeline.report_summary), then one
+section per stage: a sentence on what was computed, its tables rendered as tables (CSV, JSON and
+markdown alike), and its pictures full width, each a link to the full-size PNG with a caption that
+says what to look at. It links the stage artifacts in place (relative paths), so it opens from disk
+in any browser with no server, and it only reads, except the pictures drawn from artifacts no stage
+draws (the FE load-deflection curves of stiffness.json), which go to report/figures/.
+A stage whose artifacts are missing is said so in neutral text instead of failing the report; a JSON
 artifact whose `made_from` names another case fingerprint than the report's case is flagged as made
 from another case (or an older version of it) rather than shown as if it were current.
 An inline script marks the body with how many images loaded (data-images-ok="loaded/total"), which
@@ -14,11 +18,15 @@ import csv
 import html
 import json
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
 from geometry.artifacts import InputError, write_text_atomic
 from geometry.fingerprint import Provenance, short
+from pipeline.report_summary import key_figures, read_json, windup_at_rated_arcsec
+
+E = html.escape
 
 
 @dataclass(frozen=True)
@@ -27,37 +35,184 @@ class Section:
     folder: str            # stage folder under build/<case>/
     intro: str
     tables: tuple = ()     # file names shown as tables (csv, json, md)
+    missing: str = "not built yet: `make all CASE=<this case>` builds it"
 
 
 SECTIONS = (
     Section("Geometry", "geometry",
-            "Parametric CadQuery solids of the second stage, from the validated case file; "
-            "profile with offset/equidistant modification.", ("geometry.json",)),
+            "Parametric CadQuery solids of the second stage, from the validated case file; profile with "
+            "offset/equidistant modification. The backlash here is the rigid free play of the unloaded profile.",
+            ("geometry.json",)),
     Section("Meshes", "mesh",
-            "Crankshaft tetrahedra from the CadQuery solid (pytetwild), made once and reused by the FE stage.",
-            ()),
+            "Crankshaft tetrahedra from the CadQuery solid (pytetwild), made once and reused by the FE stage."),
     Section("Finite elements", "fem",
-            "scikit-fem: 2D cycloid-pin contact (condensed, exact non-penetration), 3D crankshaft on "
-            "its bearings, needle (turning-arm) bearing; reduced to stiffness curves.",
-            ("fem_summary.json",)),
-    Section("Transmission error: load gradient x load form (paper 001)", "matrix",
-            "Lumped torsional multibody model fed by the FE stiffness; paper 001's drive and loads.",
-            ("te_std.csv", "comparison.md")),
-    Section("Catalog tests: hysteresis, torsional rigidity, lost motion", "hysteresis",
-            "Input locked, output torque swept to +-rated and back (catalog definitions).",
+            "scikit-fem: 2D cycloid-pin contact (condensed, exact non-penetration), 3D crankshaft on its "
+            "bearings, needle (turning-arm) bearing; reduced to the load-deflection curves of stiffness.json "
+            "(drawn below) that the lumped model reads.", ("fem_summary.json",)),
+    Section("Catalog tests: hysteresis loop, torsional rigidity, lost motion, compliance budget, load sharing",
+            "hysteresis",
+            "Input locked, output torque swept 0 -> +rated -> -rated -> +rated quasi-statically (catalog "
+            "definitions). Backlash (loop width at zero torque) is free play only; lost motion (angle between "
+            "+-3 % rated) adds the elastic wind-up over that band, so it is the larger of the two.",
             ("hysteresis.json",)),
+    Section("Transmission error: load gradient x load form (paper 001)", "matrix",
+            "Lumped torsional multibody model fed by the FE stiffness; paper 001's drive (1 s speed ramp "
+            "to 7200 deg/s input) and loads (constant, 1 Hz square, 8 rad/s sine; 100..400 N m).",
+            ("te_std.csv", "comparison.md")),
     Section("Original error of the second stage: four-bar model (paper 000)", "fourbar",
             "Four-bar linkage of crank eccentricities, disc crank-hole spacing and output bearing-hole "
-            "spacing; rigid and elastic (FE compliance, project load sharing).", ("comparison.md",)),
+            "spacing; rigid and elastic (FE compliance, project load sharing). Its elastic figure is the "
+            "displacement of one crank pair's four-bar under its bearing loads, not the reducer's wind-up: "
+            "the lumped model's wind-up (hysteresis section) carries every compliance in the path, so the two "
+            "differ.", ("comparison.md",)),
+    Section("As-built error signatures", "signatures",
+            "Every as-built error source (geometry.params Errors) alone at unit size through the quasi-static "
+            "model over one output revolution: its order lines, torque and direction dependence, and the "
+            "sources a record cannot tell apart (signatures.json)."),
     Section("Tolerance Monte Carlo", "tolerance",
             "All error sources drawn from their tolerance bands.", ("summary.json",)),
     Section("Diagnosis of measured data", "diagnosis",
-            "Residual (measured - simulated) in time and orders, named causes, model extension and "
-            "its gain; paper 001's no-load bench case as a worked example.",
-            ("diagnosis.json", "paper001.json")),
+            "Residual (measured - simulated) in time and orders, named causes, model extension and its gain; "
+            "paper 001's no-load bench case as a worked example.", ("diagnosis.json", "paper001.json"),
+            missing="no bench records for this case (put records beside the case and run `diagnose`; "
+                    "see README, Bringing your own bench data)"),
 )
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg")
+
+# picture -> (title, what to see); matched on the path below build/<case>/, then on the file name
+CAPTIONS = {
+    "assembly.png": ("Second stage assembly (CadQuery)", "disc, pins and crankshaft as built from the case file: "
+                     "check that the parts fit and the crank count."),
+    "mesh.png": ("FE meshes", "the graded 2D contact mesh and the crankshaft tetrahedra: elements shrink towards "
+                 "the contact."),
+    "contact_stress.png": ("Contact stress (2D FE)", "von Mises stress at the loaded tooth-pin contact: the peak "
+                           "sits just below the surface, as Hertz predicts."),
+    "crankshaft.png": ("Crankshaft on its bearings (3D FE)", "displacement under a unit load on one eccentric "
+                       "(magnified): the shaft bends between its support bearings; the colour bar gives um per kN."),
+    "load_deflection.png": ("FE load-deflection curves", "force against approach at each contact position along "
+                            "the path of contact: the slope (tooth stiffness) changes with the pin phase and "
+                            "grows slightly with load (Hertzian line contact); the bearings beside them."),
+    "hysteresis.png": ("Catalog hysteresis loop", "torsion angle against torque in % of rated: the b/a chord gives "
+                       "the torsional rigidity, the +-3 % band the lost motion (zoom on the right); the rising and "
+                       "falling branches part only inside the clearance (frictionless contacts)."),
+    "compliance_budget.png": ("Compliance budget at rated torque", "each component's share of the output "
+                              "torsional compliance: the longest bar is where stiffness is lost."),
+    "load_sharing.png": ("Load sharing per pin and teeth in contact", "left: how many pins of each disc carry "
+                         "load at rated torque and how unevenly; right: the teeth-in-contact count stepping over "
+                         "one mesh cycle (the source of the zp x zc mesh ripple)."),
+    "te_matrix.png": ("Transmission error of paper 001's 12 load cases", "top: TE against output angle after "
+                      "the ramps (t >= 2 s), one panel per load form, one colour per torque: wind-up grows with "
+                      "torque, the load swing rides on it; bottom: order spectra with the characteristic orders "
+                      "and the load's own order marked (resolution 1 / revolutions analysed)."),
+    "individual.png": ("Four-bar output error of each source alone", "output-angle error against the deviation "
+                       "of one dimension, rigid and elastic: only the crank-to-crank eccentricity difference acts in "
+                       "first order; the elastic panel is shifted by the wind-up every build shares; dotted: +-1 arcmin."),
+    "crank_angle_scan.png": ("Exact closure against paper 000's quadratic", "rigid output error at +range deviation "
+                             "over the crank angle (symmetric log scale): the two agree except near the dead centres, "
+                             "where the free-rocker four-bar cannot close (gaps)."),
+    "surface_eccentricity_crank_hole.png": ("Pair sweep: eccentricity x crank-hole spacing",
+                                            "output error over both deviations: read the slope along each axis."),
+    "surface_eccentricity_output_hole.png": ("Pair sweep: eccentricity x output bearing-hole spacing",
+                                             "output error over both deviations: read the slope along each axis."),
+    "surface_crank_hole_output_hole.png": ("Pair sweep: crank-hole x output bearing-hole spacing",
+                                           "output error over both deviations: their mismatch, not their sign, counts."),
+    "signatures.png": ("Signature atlas", "left: TE change per unit error at rated torque, forward, per source "
+                       "(rows) and order per output revolution (columns): pin-ring lobes at m zc, carrier-side errors "
+                       "at multiples of zp, the encoder reading at 1x; right: the main line's torque exponent and "
+                       "how it changes backward."),
+    "histogram.png": ("Tolerance Monte Carlo", "output error of the drawn builds, rigid, elastic and elastic less the "
+                      "wind-up of the ideal build (shared by every build: stiffness, not accuracy); dashed: the limit."),
+    "residual_time.png": ("Diagnosis residual per record", "measured - simulated against output travel, before "
+                          "and after the extension: what the named causes remove (the once-per-revolution swing, the "
+                          "torque-dependent offset) and what stays unexplained (the mesh-order ripple)."),
+    "residual_orders.png": ("Diagnosis residual in orders", "the residual's order spectrum per record before and "
+                            "after the extension: a line that drops is explained by a named cause; a line that stays "
+                            "is unexplained by the model."),
+}
+
+
+def _picture_order(path: Path) -> tuple:
+    """Captioned pictures in CAPTIONS order (the headline one first), then the rest by name."""
+    names = list(CAPTIONS)
+    return (names.index(path.name) if path.name in names else len(names), path.as_posix())
+
+
+def _caption(rel: str) -> tuple[str, str]:
+    name = rel.rsplit("/", 1)[-1]
+    return CAPTIONS.get(rel, CAPTIONS.get(name, (name.rsplit(".", 1)[0].replace("_", " "), "")))
+
+
+def _inline(text: str) -> str:
+    """Escaped text with markdown's **bold**, *italic* and `code`."""
+    t = E(text)
+    t = re.sub(r"`([^`]+)`", r"<code>\1</code>", t)
+    t = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", t)
+    return re.sub(r"(?<![\w*])\*([^*\s][^*]*)\*(?![\w*])", r"<i>\1</i>", t)
+
+
+def _split_row(line: str) -> list[str]:
+    """Cells of a pipe-table row; `\\|` and |x| inside a cell (absolute value bars) are kept."""
+    body = line.strip()
+    body = body[1:] if body.startswith("|") else body
+    body = body[:-1] if body.endswith("|") and not body.endswith("\\|") else body
+    return [c.strip().replace("\\|", "|") for c in re.split(r"(?<!\\)\|", body)]
+
+
+def markdown_to_html(text: str) -> str:
+    """Headings, paragraphs (wrapped lines joined), bullet lists, inline emphasis and pipe tables."""
+    out: list[str] = []
+    para: list[str] = []
+    items: list[str] = []
+    table: list[str] = []
+
+    def flush():
+        if para:
+            out.append(f"<p>{_inline(' '.join(para))}</p>")
+            para.clear()
+        if items:
+            out.append("<ul>" + "".join(f"<li>{_inline(i)}</li>" for i in items) + "</ul>")
+            items.clear()
+        if table:
+            rows = [_split_row(r) for r in table if not set(r.replace("|", "").strip()) <= set("-: ")]
+            width = max(len(r) for r in rows)
+            rows = [r + [""] * (width - len(r)) for r in rows]
+            out.append(_html_table(rows[0], rows[1:], raw=True))
+            table.clear()
+    for line in text.splitlines():
+        s = line.strip()
+        if s.startswith("|"):
+            if para or items:
+                flush()
+            table.append(s)
+            continue
+        if table:
+            flush()
+        if not s:
+            flush()
+        elif s.startswith("#"):
+            flush()
+            level = min(len(s) - len(s.lstrip("#")) + 2, 6)
+            out.append(f"<h{level}>{_inline(s.lstrip('#').strip())}</h{level}>")
+        elif s.startswith(("- ", "* ")):
+            if para:
+                flush()
+            items.append(s[2:])
+        elif items and line.startswith("  "):      # continuation of a bullet
+            items[-1] += " " + s
+        else:
+            if items:
+                flush()
+            para.append(s)
+    flush()
+    return "\n".join(out)
+
+
+def _html_table(head: list[str], rows: list[list[str]], raw: bool = False) -> str:
+    cell = _inline if raw else E
+    return ("<div class='tw'><table><tr>" + "".join(f"<th>{cell(str(h))}</th>" for h in head) + "</tr>"
+            + "".join("<tr>" + "".join(f"<td>{cell(str(c))}</td>" for c in r) + "</tr>" for r in rows)
+            + "</table></div>")
 
 
 def _table_from_csv(path: Path, max_rows: int = 40) -> str:
@@ -66,81 +221,71 @@ def _table_from_csv(path: Path, max_rows: int = 40) -> str:
     if not rows:
         return ""
     head, body = rows[0], rows[1:max_rows + 1]
-    more = f"<p class='note'>{len(rows) - 1 - len(body)} more rows in {path.name}</p>" \
+    more = f"<p class='note'>{len(rows) - 1 - len(body)} more rows in {E(path.name)}</p>" \
         if len(rows) - 1 > len(body) else ""
-    return ("<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>"
-            + "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in body)
-            + "</table>" + more)
+    return _html_table(head, body) + more
 
 
-def _json_block(path: Path) -> str:
-    """Scalars as a two-column table (numbers to 4 significant figures); nested values below it."""
-    data = json.loads(path.read_text())
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.0f}" if 1e3 <= abs(v) < 1e7 else f"{v:.4g}"   # 83803, not 8.38e+04
+    if isinstance(v, list):
+        if all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+            if len(v) <= 8:
+                return ", ".join(_fmt(x) for x in v)
+            return f"{len(v)} values, {_fmt(float(min(v)))} .. {_fmt(float(max(v)))}"
+        if all(isinstance(x, list) for x in v):
+            return f"{len(v)} x {len(v[0]) if v else 0} table"
+        return ", ".join(_fmt(x) for x in v[:8]) + (" ..." if len(v) > 8 else "")
+    return str(v)
+
+
+def json_to_html(data) -> str:
+    """A JSON artifact as tables: one row per (nested) key with its value; a list of records as a
+    table of its own with one column per field; made_from left out (shown as provenance)."""
     if not isinstance(data, dict):
-        return f"<pre>{html.escape(json.dumps(data, indent=1)[:20000])}</pre>"
+        return f"<p>{E(_fmt(data))}</p>"
+    rows, records = [], []
 
-    def short(v):
-        if isinstance(v, list) and len(v) > 12:
-            return f"[{len(v)} values]"
-        if isinstance(v, dict):
-            return {k: short(x) for k, x in v.items()}
-        return v
-
-    def fmt(v):
-        return f"{v:.4g}" if isinstance(v, float) else str(v)
-    scalars = {k: v for k, v in data.items() if not isinstance(v, (dict, list))}
-    nested = {k: short(v) for k, v in data.items() if k not in scalars}
-    out = ""
-    if scalars:
-        out += "<table>" + "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(fmt(v))}</td></tr>"
-                                   for k, v in scalars.items()) + "</table>"
-    if nested:
-        out += f"<pre>{html.escape(json.dumps(nested, indent=1))}</pre>"
+    def walk(d, prefix):
+        for k, v in d.items():
+            if k == "made_from":
+                continue
+            key = f"{prefix}{k}"
+            if isinstance(v, dict):
+                walk(v, key + " / ")
+            elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+                records.append((key, v))
+            else:
+                rows.append([key, _fmt(v)])
+    walk(data, "")
+    out = _html_table(["key", "value"], rows) if rows else ""
+    for key, recs in records:
+        cols = list(dict.fromkeys(k for r in recs for k in r if k != "made_from"))
+        out += f"<h5>{E(key)}</h5>" + _html_table(cols, [[_fmt(r.get(c, "")) for c in cols] for r in recs])
     return out
-
-
-def markdown_to_html(text: str) -> str:
-    """Headings, paragraphs and pipe tables: enough for the comparison pages the stages write."""
-    out, table = [], []
-
-    def flush():
-        if table:
-            rows = [[c.strip() for c in r.strip().strip("|").split("|")] for r in table
-                    if not set(r.replace("|", "").strip()) <= set("-: ")]
-            out.append("<table><tr>" + "".join(f"<th>{html.escape(c)}</th>" for c in rows[0]) + "</tr>"
-                       + "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>"
-                                 for r in rows[1:]) + "</table>")
-            table.clear()
-    for line in text.splitlines():
-        if line.lstrip().startswith("|"):
-            table.append(line)
-            continue
-        flush()
-        if line.startswith("#"):
-            level = min(len(line) - len(line.lstrip("#")) + 2, 6)
-            out.append(f"<h{level}>{html.escape(line.lstrip('#').strip())}</h{level}>")
-        elif line.strip():
-            out.append(f"<p>{html.escape(line)}</p>")
-    flush()
-    return "\n".join(out)
 
 
 def _table(path: Path) -> str:
     if path.suffix == ".csv":
         return _table_from_csv(path)
     if path.suffix == ".json":
-        return _json_block(path)
+        return json_to_html(read_json(path))
     if path.suffix == ".md":
         return markdown_to_html(path.read_text())
-    return f"<pre>{html.escape(path.read_text())}</pre>"
+    return f"<pre>{E(path.read_text())}</pre>"
 
 
-STYLE = """body{font-family:sans-serif;max-width:1200px;margin:auto;padding:1em;color:#222}
-img{max-width:100%;border:1px solid #ccc;margin:4px 0}
-.figs{display:grid;grid-template-columns:repeat(auto-fill,minmax(520px,1fr));gap:8px}
-table{border-collapse:collapse;margin:6px 0}td,th{border:1px solid #bbb;padding:2px 6px;font-size:90%}
-th{background:#eee}pre{background:#f6f6f6;padding:6px;overflow:auto;max-height:420px;font-size:85%}
-.missing{color:#a00}.note{color:#666;font-size:90%}"""
+STYLE = """body{font-family:sans-serif;max-width:1280px;margin:auto;padding:1em;color:#222;line-height:1.35}
+figure{margin:14px 0}img{max-width:100%;height:auto;border:1px solid #ccc}
+figcaption{font-size:92%;color:#333;margin-top:3px}.path{color:#888;font-size:85%}
+.tw{overflow-x:auto;max-width:100%}table{border-collapse:collapse;margin:6px 0}
+td,th{border:1px solid #bbb;padding:2px 6px;font-size:90%;vertical-align:top;overflow-wrap:break-word}
+th{background:#eee;text-align:left}table.key{table-layout:fixed;width:100%}
+table.key td,table.key th{font-size:95%;padding:3px 8px}table.key td.v{font-weight:bold}.why{color:#555;font-size:88%}
+pre{background:#f6f6f6;padding:6px;overflow:auto;max-height:420px;font-size:85%;white-space:pre-wrap}
+code{background:#f3f3f3;padding:0 2px}.missing{color:#a00}.absent{color:#666;font-style:italic}
+.note{color:#666;font-size:90%}nav ul{columns:2;font-size:92%}"""
 
 SCRIPT = """<script>
 window.addEventListener('load', function () {
@@ -165,48 +310,105 @@ def _stale_note(path: Path, case_fingerprint: str | None) -> str:
     try:
         prov = Provenance.from_json(made, path.name)
     except InputError as exc:
-        return f"<p class='missing'>{html.escape(str(exc))}</p>"
+        return f"<p class='missing'>{E(str(exc))}</p>"
     if prov.case_fingerprint == case_fingerprint:
         return ""
-    return (f"<p class='missing'>{html.escape(path.name)} was made from case {html.escape(prov.case_name)} "
+    return (f"<p class='missing'>{E(path.name)} was made from case {E(prov.case_name)} "
             f"(fingerprint {short(prov.case_fingerprint)}), not from this case as it is now (fingerprint "
             f"{short(case_fingerprint)}): rebuild it (make)</p>")
 
 
-def build_report(case_dir: str | Path, case_name: str | None = None,
-                 case_fingerprint: str | None = None) -> Path:
+def _figure(path: Path, case_dir: Path, out_dir: Path) -> str:
+    rel = os.path.relpath(path, out_dir)
+    where = path.relative_to(case_dir).as_posix()
+    title, what = _caption(where)
+    return (f"<figure><a href='{E(rel)}'><img src='{E(rel)}' alt='{E(title)}'></a>"
+            f"<figcaption><b>{E(title)}.</b> {E(what)} <span class='path'>({E(where)}; click for full size)"
+            f"</span></figcaption></figure>")
+
+
+def _derived_figures(case_dir: Path, out_dir: Path, name: str) -> dict[str, list[Path]]:
+    """Pictures of artifacts no stage draws, by section folder: stiffness.json's load-deflection."""
+    made: dict[str, list[Path]] = {}
+    stiff = read_json(case_dir / "fem" / "stiffness.json")
+    if isinstance(stiff, dict) and isinstance(stiff.get("pin_contact"), dict):
+        from pipeline.figures import load_deflection
+        path = out_dir / "figures" / "load_deflection.png"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        load_deflection(path, stiff, title=f"{name}: FE load-deflection curves (stiffness.json)")
+        made["fem"] = [path]
+    return made
+
+
+def _summary(case_dir: Path, rated_Nm, ratio) -> str:
+    rows = key_figures(case_dir, rated_Nm, ratio)
+    body = "".join(
+        f"<tr><th>{E(r.quantity)}</th><td class='v'>{E(r.value)}</td><td>{E(r.reference)}</td>"
+        f"<td class='why'>{E(r.note)} <span class='path'>{E(r.where)}</span></td></tr>" for r in rows)
+    return ("<h2 id='summary'>Key figures beside their references</h2><div class='tw'><table class='key'>"
+            "<colgroup><col style='width:24%'><col style='width:24%'><col style='width:22%'><col style='width:30%'>"
+            "</colgroup><tr><th>quantity</th><th>this case</th><th>reference</th><th>why it differs / source</th></tr>"
+            f"{body}</table></div>")
+
+
+def _budget_table(h: dict | None) -> str:
+    """hysteresis.json's compliance budget, largest share first, with each part's equivalent
+    stiffness (tangent rigidity / share: that part alone would give this rigidity)."""
+    budget, rig = (h or {}).get("compliance_budget"), (h or {}).get("tangent_rigidity_at_rated_Nm_per_arcmin")
+    if not isinstance(budget, dict) or not budget:
+        return ""
+    rows = [[k, f"{100 * v:.1f}", f"{rig / v:.0f}" if rig and v > 0 else "-"]
+            for k, v in sorted(budget.items(), key=lambda kv: -kv[1])]
+    return ("<h4>Compliance budget at rated torque</h4>"
+            + _html_table(["component", "share of output compliance [%]", "equivalent rigidity [N m/arcmin]"], rows))
+
+
+def _windup_note(case_dir: Path) -> str:
+    """The lumped model's wind-up at rated torque, beside the four-bar's figures."""
+    w = windup_at_rated_arcsec(case_dir)
+    if w is None:
+        return ""
+    return (f"<p class='note'>Lumped model (hysteresis.csv): output wind-up at rated torque, input locked = "
+            f"{w:.1f} arcsec (half the free play included). The four-bar elastic error above is another quantity: "
+            "one crank pair's linkage under its bearing loads, not the whole compliance path.</p>")
+
+
+def build_report(case_dir: str | Path, case_name: str | None = None, case_fingerprint: str | None = None,
+                 rated_torque_Nm: float | None = None, ratio: float | None = None) -> Path:
     """Write <case_dir>/report/index.html over the artifacts present; return its path. With the
-    case's fingerprint, artifacts made from another version of the case are flagged."""
+    case's fingerprint, artifacts made from another version of the case are flagged; rated torque
+    and ratio pick the catalog and paper references of the summary."""
     case_dir = Path(case_dir)
     out_dir = case_dir / "report"
     name = case_name or case_dir.name
+    derived = _derived_figures(case_dir, out_dir, name)
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>RV transmission error: "
-             f"{html.escape(name)}</title><style>{STYLE}</style>{SCRIPT}</head><body>",
-             f"<h1>RV reducer transmission error report: {html.escape(name)}</h1>"]
+             f"{E(name)}</title><style>{STYLE}</style>{SCRIPT}</head><body>",
+             f"<h1>RV reducer transmission error report: {E(name)}</h1>",
+             _summary(case_dir, rated_torque_Nm, ratio)]
     toc = []
     for sec in SECTIONS:
         folder = case_dir / sec.folder
-        anchor = sec.folder
-        toc.append(f"<li><a href='#{anchor}'>{html.escape(sec.title)}</a></li>")
-        parts.append(f"<h2 id='{anchor}'>{html.escape(sec.title)}</h2><p>{html.escape(sec.intro)}</p>")
+        toc.append(f"<li><a href='#{sec.folder}'>{E(sec.title)}</a></li>")
+        parts.append(f"<h2 id='{sec.folder}'>{E(sec.title)}</h2><p>{_inline(sec.intro)}</p>")
         if not folder.is_dir():
-            parts.append(f"<p class='missing'>not built (no {sec.folder}/ folder)</p>")
+            parts.append(f"<p class='absent'>{_inline(sec.missing)}</p>")
             continue
         parts.extend(_stale_note(p, case_fingerprint) for p in sorted(folder.glob("*.json")))
         for t in sec.tables:
             if (folder / t).exists():
-                parts.append(f"<h4>{html.escape(t)}</h4>" + _table(folder / t))
-        images = sorted(p for p in folder.rglob("*") if p.suffix in IMAGE_SUFFIXES)
-        if images:
-            parts.append("<div class='figs'>" + "".join(
-                f"<figure><img src='{html.escape(os.path.relpath(p, out_dir))}' alt='{html.escape(p.name)}'>"
-                f"<figcaption class='note'>{html.escape(str(p.relative_to(case_dir)))}</figcaption></figure>"
-                for p in images) + "</div>")
-        sub_reports = sorted(p for p in folder.rglob("index.html"))
-        for p in sub_reports:
-            parts.append(f"<p><a href='{html.escape(os.path.relpath(p, out_dir))}'>detailed page: "
-                         f"{html.escape(str(p.relative_to(case_dir)))}</a></p>")
-    parts.insert(2, "<ul>" + "".join(toc) + "</ul>")
+                parts.append(f"<h4>{E(t)}</h4>" + _table(folder / t))
+        if sec.folder == "hysteresis":
+            parts.append(_budget_table(read_json(folder / "hysteresis.json")))
+        if sec.folder == "fourbar":
+            parts.append(_windup_note(case_dir))
+        images = derived.get(sec.folder, []) + sorted((p for p in folder.rglob("*") if p.suffix in IMAGE_SUFFIXES),
+                                                      key=_picture_order)
+        parts.extend(_figure(p, case_dir, out_dir) for p in images)
+        for p in sorted(folder.rglob("index.html")):
+            parts.append(f"<p><a href='{E(os.path.relpath(p, out_dir))}'>detailed page: "
+                         f"{E(p.relative_to(case_dir).as_posix())}</a></p>")
+    parts.insert(3, "<nav><ul><li><a href='#summary'>Key figures</a></li>" + "".join(toc) + "</ul></nav>")
     parts.append("</body></html>")
     path = out_dir / "index.html"
     write_text_atomic(path, "\n".join(parts))

@@ -7,9 +7,21 @@ so that dynamics tests run fast and before/without the FE stage, with every figu
                  eq. 5.36 plus the disc half-plane approach to 3 mm depth (fem.hertz), fitted to
                  F = k approach^n over 50..3000 N at each phase (0..180 deg).
   turning arm    Palmgren needle approach at Stribeck's Q_max = 4.08 F / Z (fem.hertz), fitted.
-  crankshaft     simply supported journal-radius shaft, load at mid-span: 48 E I / L^3; torsion
-                 G J / (L / 2) (planet at one end, eccentrics mid-span).
-  support        the case file's support_bearing_stiffness_N_per_um.
+  crankshaft     torsion G J / (L / 2) of the journal-radius shaft (planet at one end, eccentrics
+                 mid-span); bending: the stepped Timoshenko beam with both eccentrics loaded
+                 (fem.crank_tilt.beam_flexibility, supports spread over the seats), 1 / C11 of it.
+  support        the case's tapered roller bearing (fem.tapered_roller.case_support_setup) by the
+                 Palmgren-Stribeck closed form (rigid rings, zero clearance, no preload):
+                 delta(F) = rigid_ring_radial_deflection_m, stiffness its tangent F / (0.9 delta) at
+                 the operating load of the rated torque.
+  carrier        the portal-frame closed form (rigid plates, flange held, pillars as fixed-guided
+                 Timoshenko beams; fem.carrier.portal_frame_reference) as a rigid turn of the end
+                 plate's seats about the axis, the flange seats rigid: C = a^2 t t^T / K on the
+                 end-plate seats (t the tangents).
+  pin series     disc body RIGID (no closed form for the holed disc: the FE is fem.disc_body);
+                 groove: the housing's half-plane approach to one pin pitch under Hertz line contact
+                 with the clearance radius R' = R (R + dR) / dR, H7/h6 mean clearance (the small-angle
+                 limit of fem.pin_groove's conformal contact).
   involute mesh  ISO 6336-1 single-pair stiffness c' = 14 N/(mm um) per face width; mean mesh
                  stiffness c' eps b, peak-to-peak variation 1 / eps (one vs two pairs); eps from
                  the standard-gear contact-ratio formula.
@@ -21,14 +33,13 @@ import math
 import numpy as np
 
 from fem import hertz
-from fem.stiffness import SCHEMA, PinContact, StiffnessModel, TurningArm
+from fem.stiffness import (SCHEMA, CarrierSeats, CrankBending, PinContact, PinSeries, StiffnessModel,
+                           SupportBearings, TurningArm)
 from geometry.fingerprint import made_from
 from geometry import pin_profile
 from geometry.params import ReducerCase
 
 ISO_C_PRIME_N_PER_MM_UM = 14.0   # ISO 6336-1 single-pair tooth stiffness, solid spur gears
-PIN_LOADS_N = np.geomspace(50.0, 3000.0, 8)
-NEEDLE_LOADS_N = np.geomspace(200.0, 20000.0, 8)
 DISC_DATUM_DEPTH_M = 3e-3
 
 
@@ -54,48 +65,97 @@ def _fit(F, d):
     return math.exp(lnk), n
 
 
+def _tables(case: ReducerCase) -> tuple[np.ndarray, np.ndarray]:
+    """Pin and needle load levels over the FE stage's ranges (fem.reduce.table_loads_N)."""
+    from fem.reduce import table_loads_N
+    t = table_loads_N(case)
+    return t["pin"], t["needle"]
+
+
+def _support_bearings(case: ReducerCase) -> SupportBearings:
+    from fem import tapered_roller as tr
+    su = tr.case_support_setup(case)
+    b = su.bearing
+    op = tr.operating_radial_load_N(case, case.rated_torque_Nm)
+    loads = np.geomspace(0.02, 1.0, 8) * 2 * tr.crank_support_load_N(case, case.operation.momentary_torque_Nm)["radial_N"]
+    defl = np.array([tr.rigid_ring_radial_deflection_m(b, F) for F in loads])
+    k = op / (0.9 * tr.rigid_ring_radial_deflection_m(b, op))
+    return SupportBearings(b.designation, b.roller_count, b.roller_length_mm * 1e-3, b.roller_diameter_mm * 1e-3,
+                           float(np.degrees(b.alpha_rad)), su.preload_N, loads, defl, op, k)
+
+
+def _carrier(case: ReducerCase) -> CarrierSeats:
+    from fem.carrier import portal_frame_reference
+    from geometry.carrier import CarrierGeometry
+    g = CarrierGeometry.from_case(case)
+    K = portal_frame_reference(g, case.material.youngs_modulus_GPa * 1e9,
+                               case.material.poisson_ratio)["end_plate_stiffness_Nm_per_rad"]
+    nc, a = g.crank_count, g.crank_circle_radius_mm * 1e-3
+    t = np.zeros(4 * nc)
+    for j, b in enumerate(g.crank_angles_rad()):
+        t[4 * j + 2:4 * j + 4] = -math.sin(b), math.cos(b)          # seat 1 = end plate
+    return CarrierSeats(a * a * np.outer(t, t) / K)
+
+
+def _pin_series(case: ReducerCase, loads: np.ndarray) -> PinSeries:
+    from fem.pin_groove import iso286_h7_h6_radial_clearance_m
+    c, E, nu = case.cycloid, case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
+    R, w = c.pin_radius_mm * 1e-3, c.width_mm * 1e-3
+    dR = iso286_h7_h6_radial_clearance_m(2 * c.pin_radius_mm)[1]
+    pitch = 2 * math.pi * c.pin_circle_radius_mm * 1e-3 / c.zp
+    _, b = hertz.hertz_line(loads, w, R * (R + dR) / dR, hertz.contact_modulus(E, nu))
+    d = np.array([hertz.half_plane_approach(F, w, bb, pitch, E, nu) for F, bb in zip(loads, b)])
+    return PinSeries(0.0, loads.copy(), d)
+
+
 def stiffness_for_tests(case: ReducerCase) -> StiffnessModel:
+    from fem.crank_tilt import beam_flexibility, two_eccentric_blocks
     E = case.material.youngs_modulus_GPa * 1e9
     nu = case.material.poisson_ratio
     Es = hertz.contact_modulus(E, nu)
     L = case.cycloid.width_mm * 1e-3
     Rr = case.cycloid.pin_radius_mm * 1e-3
+    pin_loads, needle_loads = _tables(case)
     pos = np.linspace(0.0, 180.0, 19)
     # the pin at phase phi touches the profile at t = phi / zc (C(t) has zc lobes; DESIGN.md pose)
     rho = _profile_curvature_radius_m(case, np.deg2rad(pos) / case.cycloid.zc)
-    P, Lq = len(pos), len(PIN_LOADS_N)
+    P, Lq = len(pos), len(pin_loads)
     app, p0s, bs = np.zeros((P, Lq)), np.zeros((P, Lq)), np.zeros((P, Lq))
     ks, ns = np.zeros(P), np.zeros(P)
     for i, r in enumerate(rho):
         Reff = hertz.effective_radius(Rr, r)
-        p0, b = hertz.hertz_line(PIN_LOADS_N, L, Reff, Es)
+        p0, b = hertz.hertz_line(pin_loads, L, Reff, Es)
         d = np.array([hertz.cylinder_centre_approach(F, L, Rr, bb, E, nu)
                       + hertz.half_plane_approach(F, L, bb, DISC_DATUM_DEPTH_M, E, nu)
-                      for F, bb in zip(PIN_LOADS_N, b)])
+                      for F, bb in zip(pin_loads, b)])
         app[i], p0s[i], bs[i] = d, p0, b
-        ks[i], ns[i] = _fit(PIN_LOADS_N, d)
+        ks[i], ns[i] = _fit(pin_loads, d)
     ck = case.crankshaft
-    defl = hertz.needle_bearing_deflection(NEEDLE_LOADS_N, ck.needle_count, ck.needle_length_mm * 1e-3)
-    kta, nta = _fit(NEEDLE_LOADS_N, defl)
-    I, J = hertz.circle_inertia(ck.journal_radius_mm * 1e-3)
+    defl = hertz.needle_bearing_deflection(needle_loads, ck.needle_count, ck.needle_length_mm * 1e-3)
+    kta, nta = _fit(needle_loads, defl)
+    _, J = hertz.circle_inertia(ck.journal_radius_mm * 1e-3)
     span = ck.support_span_mm * 1e-3
     G = E / (2 * (1 + nu))
     eps = contact_ratio(case)
     k_mesh = ISO_C_PRIME_N_PER_MM_UM * eps * case.stage1.face_width_mm * 1e6
+    Cb, Jf = two_eccentric_blocks(beam_flexibility(case))
     return StiffnessModel(
         case_name=case.name,
-        pin_contact=PinContact(position_deg=pos, load_N=PIN_LOADS_N.copy(), approach_m=app,
+        pin_contact=PinContact(position_deg=pos, load_N=pin_loads.copy(), approach_m=app,
                                peak_pressure_Pa=p0s, half_width_m=bs, law_k_N_per_m_pow=ks, law_n=ns),
-        turning_arm=TurningArm(load_N=NEEDLE_LOADS_N.copy(), deflection_m=defl,
+        turning_arm=TurningArm(load_N=needle_loads.copy(), deflection_m=defl,
                                law_k_N_per_m_pow=kta, law_n=nta),
-        crankshaft_bending_stiffness_N_per_m=48 * E * I / span ** 3,
+        crankshaft_bending_stiffness_N_per_m=1.0 / Cb[0, 0],
         crankshaft_torsional_stiffness_Nm_per_rad=G * J / (span / 2),
-        support_bearing_radial_stiffness_N_per_m=ck.support_bearing_stiffness_N_per_um * 1e6,
         involute_mesh_mean_stiffness_N_per_m=k_mesh,
         involute_mesh_stiffness_variation=1.0 / eps,
         involute_mesh_contact_ratio=eps,
-        sources={"all": "tests/support.py closed-form TEST STAND-IN (Hertz/Johnson, Palmgren, beam "
-                        "theory, ISO 6336-1), not FE"},
+        support_bearings=_support_bearings(case),
+        crank_bending=CrankBending(Cb, Jf),
+        carrier=_carrier(case),
+        pin_series=_pin_series(case, pin_loads),
+        sources={"all": "tests/support.py closed-form TEST STAND-IN (Hertz/Johnson, Palmgren, Stribeck, "
+                        "stepped beam, portal frame, ISO 6336-1; disc body rigid), not FE"},
         made_from=made_from(case, SCHEMA))   # fingerprinted like the fem stage's file
 
 

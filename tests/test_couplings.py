@@ -119,16 +119,21 @@ def test_each_coupling_damping_is_minus_the_velocity_derivative_of_its_force(loa
     assert np.abs(S @ (C - Cfd) @ S).max() < 1e-6 * np.abs(S @ C @ S).max()
 
 
-def test_the_standard_layout_names_the_blocks_of_the_original_index_arithmetic():
+def test_the_standard_layout_names_the_blocks():
     nc, nd = 3, 2
     lay = DofLayout.standard(nc, nd)
-    assert lay.n == 1 + 3 * nc + 3 * nd
+    assert lay.n == 1 + nc + 2 * nc * nd + 3 * nd
     assert lay["carrier"].index() == 0
     assert [lay["crank_rotation"].index(j) for j in range(nc)] == [1 + j for j in range(nc)]
-    assert [lay["crank_axis"].index(j, "y") for j in range(nc)] == [2 + nc + 2 * j for j in range(nc)]
-    assert [lay["disc"].index(d, "rot") for d in range(nd)] == [3 + 3 * nc + 3 * d for d in range(nd)]
+    # crank axis per disc plane: item j nd + d
+    assert [lay["crank_axis"].index(j * nd + 1, "y") for j in range(nc)] == \
+        [1 + nc + 2 * (j * nd + 1) + 1 for j in range(nc)]
+    first_disc = 1 + nc + 2 * nc * nd
+    assert [lay["disc"].index(d, "rot") for d in range(nd)] == [first_disc + 2 + 3 * d for d in range(nd)]
     assert lay.labels[:2] == ("carrier", "crank1_rot") and lay.labels[-1] == "disc2_rot"
-    assert list(lay.scale(0.05)) == [0.05] * 4 + [1.0] * 6 + [1.0, 1.0, 0.05] * 2
+    assert lay.labels[1 + nc:1 + nc + 4] == ("crank1_plane1_x", "crank1_plane1_y",
+                                             "crank1_plane2_x", "crank1_plane2_y")
+    assert list(lay.scale(0.05)) == [0.05] * 4 + [1.0] * 12 + [1.0, 1.0, 0.05] * 2
     with pytest.raises(IndexError, match="disc"):
         lay["disc"].index(2)
     with pytest.raises(KeyError, match="crank_axis"):
@@ -140,14 +145,17 @@ def test_a_layout_with_an_extra_block_moves_the_coupling_index_tables_with_it():
     # new layout address the discs through their tables, the solvers see only n
     lay = DofLayout.build([("carrier", 1, ("rot",), (True,), ""),
                            ("crank_rotation", 3, ("rot",), (True,), "crank"),
-                           ("crank_axis", 3, ("x", "y"), (False, False), "crank"),
+                           ("crank_axis", 6, ("x", "y"), (False, False), "crank"),
                            ("crank_tilt", 3, ("a", "b"), (True, True), "crank"),
                            ("disc", 2, ("x", "y", "rot"), (False, False, True), "disc")])
     model = model_for_tests()
     p = couplings.pin.params(model.case, model.stiffness, lay, couplings.Slots())
-    assert p.dof.tolist() == [[16, 17, 18], [19, 20, 21]]
+    assert p.dof.tolist() == [[22, 23, 24], [25, 26, 27]]
     n = couplings.needle.params(model.case, model.stiffness, lay, couplings.Slots())
-    assert n.dof[1, 2].tolist() == [0, 3, 8, 9, 19, 20, 21]
+    # disc 2 (d = 1), crank 3 (j = 2): crank axis item j nd + d = 5 -> indices 4 + 10, 4 + 11
+    assert n.dof[1, 2].tolist() == [0, 3, 14, 15, 25, 26, 27]
+    s = couplings.support.params(model.case, model.stiffness, lay, couplings.Slots())
+    assert s.dof[2, 1].tolist() == [14, 15] and s.K_N_per_m.shape == (12, 12)
 
 
 def test_every_kernel_cache_is_stamped_with_the_sources_of_the_whole_compiled_unit(tmp_path):

@@ -27,11 +27,25 @@ CASE = load_case(Path(__file__).parents[1] / "cases" / "rv40e-81.toml")
 STIFF = support.stiffness_for_tests(CASE)
 PPR = 256
 CASES = [(c, s) for c in ("output_coaxiality", "torsional_stiffness", "backlash") for s in range(4)] \
-    + [("crank_eccentricity_error", s) for s in range(3)]
-TRUTH_KEY = {"output_coaxiality": "output_coaxiality_um", "torsional_stiffness": "stiffness_factor",
-             "backlash": "pin_clearance_um", "crank_eccentricity_error": "crank_eccentricity_error_single_um"}
-TORQUES = {"crank_eccentricity_error": (0.1, 0.3, 0.6)}
+    + [("crank_eccentricity_error", s) for s in range(3)] \
+    + [(c, s) for c in ("pin_ring_pattern", "housing_stiffness_pattern", "disc_cumulative_pitch") for s in range(2)]
+TRUTH_KEY = {"output_coaxiality": "output_coaxiality_um", "torsional_stiffness": "compliance_factor",
+             "backlash": "pin_clearance_um", "crank_eccentricity_error": "crank_eccentricity_error_single_um",
+             "disc_cumulative_pitch": "disc_cumulative_pitch_um"}
+# the carrier- and housing-side patterns shift the lost motion at light load (even in their size,
+# `dc_even`): at 3 % rated that shift is named as backlash first; from 10 % rated the lines lead
+TORQUES = {c: (0.1, 0.3, 0.6) for c in ("crank_eccentricity_error", "disc_cumulative_pitch", "pin_ring_pattern")}
 REL_TOL = {"crank_eccentricity_error": 0.10}
+# zp x is shared (dynamics.signatures.groups): a hidden disc pitch error may be named as the
+# eccentric journal of its group, said as an alternative; either name is right on a zp x line alone
+SAME_SIGNATURE = {"disc_cumulative_pitch": {"disc_cumulative_pitch", "crank_eccentricity_error"}}
+
+
+def _truth_key(cause, truth):
+    """The drawn size's key: fixed per cause, or the drawn lobe's (pin ring, housing)."""
+    if cause in TRUTH_KEY:
+        return TRUTH_KEY[cause]
+    return next(k for k, v in truth.items() if k.endswith(("_um", "_fraction")))
 
 
 def _records(effects, seed, torque_fractions=(0.03, 0.3, 0.6)):
@@ -44,9 +58,13 @@ def test_the_model_finds_a_hidden_effect_blind(cause, seed):
     eff = draw_effect(np.random.default_rng(100 + seed), CASE, cause)
     d = diagnose(CASE, STIFF, _records([eff], 100 + seed, TORQUES.get(cause, (0.03, 0.3, 0.6))),
                  points_per_rev=PPR)
+    if cause in SAME_SIGNATURE:
+        assert d.cause in SAME_SIGNATURE[cause], [(f.cause, f.score) for f in d.findings]
+        assert d.extension.gain >= 0.6 and d.extension.holdout_gain >= 0.6
+        return
     assert d.cause == cause, [(f.cause, f.score) for f in d.findings]
     assert d.extension.gain >= 0.6 and d.extension.holdout_gain >= 0.6
-    key = TRUTH_KEY[cause]
+    key = _truth_key(cause, eff.truth)
     assert d.extension.parameters[key] == pytest.approx(eff.truth[key], rel=REL_TOL.get(cause, 0.05))
     if cause == "crank_eccentricity_error":
         assert d.extension.parameters["crank_eccentricity_error_crank"] == eff.truth["crank_eccentricity_error_crank"]
@@ -85,9 +103,11 @@ def test_both_eccentrics_of_a_crank_misfit_show_at_twice_the_crankshaft_order_ev
     z1, z2 = lines(de)
     _, m2 = lines(-de)
     _, n2 = lines(de / 10.0)
-    # measured through this model (RV-40E, 3 % rated): 10 um -> 2 zp x 10.4 arcsec, zp x 0.003;
-    # -10 um -> 10.4; 1 um -> 2 zp x 0.01 (inside the elastic approach: second order).
-    # Tolerances: factor-level bounds, 5 % on the evenness (the two measured 0.07 % apart).
-    assert z2 > 5.0 and z1 < 0.02 * z2
+    # measured through this model (RV-40E, 3 % rated): 10 um -> 2 zp x 7.7 arcsec, zp x 0.45: the
+    # zp x line is what the two discs' unequal supports leave (the crank axis per disc plane: the
+    # end-plate side gives more than the clamped flange side); with one lateral spring per crank
+    # it was 0.003. -10 um -> the same 2 zp x; 1 um -> second order (inside the elastic approach).
+    # Tolerances: factor-level bounds, 5 % on the evenness.
+    assert z2 > 5.0 and z1 < 0.1 * z2
     assert m2 == pytest.approx(z2, rel=0.05)
     assert n2 < 0.05 * z2

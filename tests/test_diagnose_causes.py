@@ -48,7 +48,7 @@ class Line5(Cause):
         return {"line5_arcsec": a, "line5_arcsec_ci95": a_ci, "line5_phase_deg": ph, "line5_phase_deg_ci95": ph_ci}
 
     def evidence(self, ev: Evidence) -> str:
-        return f"{ev.prefix}a 5x line of {ev.line_by_torque(5)} arcsec{ev.alternatives}."
+        return f"{ev.prefix}a 5x line of {ev.line_by_torque(5)}{ev.alternatives}."
 
     def draw(self, rng, case):
         a, ph = rng.uniform(3.0, 6.0), rng.uniform(-180.0, 180.0)
@@ -127,8 +127,12 @@ def test_the_backlash_lower_bound_closes_the_clearance_and_a_negative_stiffness_
     assert closed_form_min_clearance_mm(closed) == pytest.approx(0.0, abs=1e-12)
     assert bl.out_of_bounds(CASE, [lo - 0.1]) and not bl.out_of_bounds(CASE, [lo + 0.1])
     ts = causes.get("torsional_stiffness")
-    assert ts.out_of_bounds(CASE, [-1.5])          # kappa = 1/c - 1 < -1: c < 0
-    assert not ts.out_of_bounds(CASE, [1.5])       # c = 0.4 (README: the real RV-160N fit)
+    # u = ln(1/c): no value is a negative stiffness; beyond c in [0.05, 20] it is a wrong model
+    assert ts.out_of_bounds(CASE, [np.log(30.0)]) and ts.out_of_bounds(CASE, [-np.log(30.0)])
+    assert not ts.out_of_bounds(CASE, [-np.log(0.4)])   # c = 0.4 (README: the real RV-160N fit)
+    for u in (-50.0, 50.0):                             # any u is a positive, finite stiffness
+        _, s = ts.apply(CASE, STIFF, [u])
+        assert 0 < s.crankshaft_torsional_stiffness_Nm_per_rad < np.inf
 
 
 def test_an_unknown_or_undrawable_cause_is_refused_naming_the_allowed():

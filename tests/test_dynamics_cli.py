@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from fem.stiffness import save
+from fem.stiffness import COMPONENTS, save
 from geometry.params import load_case
 from pipeline.cli import main
 from support import case_path, stiffness_for_tests
@@ -57,7 +57,9 @@ def test_hysteresis_writes_the_catalog_figures(tmp_path, stiffness_file):
     assert h["lost_motion_arcmin"] > h["backlash_arcmin"]
     assert (tmp_path / "hysteresis.csv").exists() and (tmp_path / "hysteresis.png").exists()
     assert sum(h["compliance_budget"].values()) == pytest.approx(1.0, abs=1e-9)
-    assert set(h["compliance_budget"]) >= {"pin", "needle", "support", "mesh"}
+    assert tuple(h["compliance_budget"]) == COMPONENTS       # by physical component (dynamics.budget)
+    assert set(h["compliance_budget_by_coupling"]) >= {"pin", "needle", "support", "mesh"}
+    assert (tmp_path / "compliance_budget.png").exists()
 
 
 def test_matrix_writes_the_sigma_table_with_twelve_cells(tmp_path, stiffness_file):
@@ -132,3 +134,13 @@ def test_the_matrix_reuses_finished_cells_with_the_same_inputs_and_recomputes_th
     assert (tmp_path / "te_std_whole.csv").read_bytes() == table      # reused or computed: same numbers
     assert main(argv[:-1] + ["1e-4"]) == 0                              # another time step: all new
     assert "12 cells computed, 0 reused" in capsys.readouterr().out
+
+
+def test_a_torque_beyond_the_momentary_rating_is_a_one_line_error(tmp_path, stiffness_file, capsys):
+    # issue 12: constant:50000 (121x rated) "completed" with --dt 1e-5
+    out = tmp_path / "r.csv"
+    rc = main(["simulate", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--load",
+               "constant:50000", "--dt", "1e-5", "--out", str(out)])
+    assert rc == 2 and not out.exists()
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "momentary" in err and "2058" in err

@@ -45,3 +45,11 @@ def test_bad_load_specs_are_input_errors_naming_the_allowed_forms(text):
 def test_parse_round_trip():
     assert LoadSpec.parse("Sine:300") == LoadSpec("sine", 300.0)
     assert str(LoadSpec("square", 100)) == "square:100"
+
+
+@pytest.mark.parametrize("form", ["constant", "square", "sine"])
+def test_peak_torque_is_the_largest_torque_the_form_reaches(form):
+    # what simulate checks against the momentary rating: max |T(t)| over a whole sine period (8 rad/s)
+    spec = LoadSpec(form, -300.0)
+    t = np.linspace(0.0, 12.0, 600_001)
+    assert spec.peak_torque_Nm == pytest.approx(np.abs(load_torque_Nm(spec, t)).max(), rel=1e-8)

@@ -70,6 +70,8 @@ def test_the_bearing_is_chosen_from_the_journal_and_the_envelope():
     env = tr.case_envelope(case)
     assert env.max_width_mm == case.crankshaft.journal_length_mm
     b, note = tr.closest_bearing(case.crankshaft.journal_radius_mm, env)
+    assert b.designation == "30203" and note == "fits"      # the case's journal is sized to it
+    b, note = tr.closest_bearing(9.0, tr.Envelope(40, 10))  # the former 10 mm journal
     assert b.designation == "30203" and "width 13.25 > 10" in note
 
 

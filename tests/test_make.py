@@ -24,6 +24,7 @@ pytestmark = pytest.mark.skipif(MAKE is None, reason="GNU make not installed")
 TARGETS = {"geometry": "geometry/profile.csv", "mesh": "mesh/crankshaft_mesh.npz", "fem": "fem/stiffness.json",
            "matrix": "matrix/te_std.csv", "hysteresis": "hysteresis/hysteresis.json",
            "fourbar": "fourbar/comparison.md", "tolerance": "tolerance/summary.json",
+           "signatures": "signatures/signatures.json",
            "diagnosis": "diagnosis/diagnosis.json", "paper001": "diagnosis/paper001.json",
            "report": "report/index.html"}
 

@@ -193,3 +193,52 @@ def test_a_case_file_with_a_utf8_byte_order_mark_loads(tmp_path):
     p = tmp_path / "bom.toml"
     p.write_bytes(b"\xef\xbb\xbf" + (CASES / "rv40e-105.toml").read_bytes())
     assert load_case(p).name == "rv40e-105"
+
+
+# ----------------------------------------------------------------------------- stage 1 (involute)
+def test_the_iso53_rack_formulas_meet_their_textbook_values():
+    from geometry import spur
+    # undercut limit 1 - z sin^2(alpha) / 2 (the rack's straight flank ends 1.25 - 0.38 (1 - sin 20)
+    # = 0.99997 m deep): 0.298 for z = 12, 0.415 for z = 10, 17.1 teeth at x = 0
+    assert spur.undercut_limit(12, 20.0) == pytest.approx(1 - 6 * np.sin(np.radians(20)) ** 2, abs=1e-4)
+    assert spur.undercut_limit(17, 20.0) > 0 > spur.undercut_limit(18, 20.0)
+    # a rack tooth (z -> inf) is pi/2 - 2 tan(alpha) modules thick at its tip (0.8428); the tip
+    # thins as x grows
+    rack_tip = np.pi / 2 - 2 * np.tan(np.radians(20))
+    assert spur.tip_thickness_of_module(10 ** 7, 20.0, 0.0) == pytest.approx(rack_tip, abs=1e-5)
+    assert spur.tip_thickness_of_module(12, 20.0, 0.3) < spur.tip_thickness_of_module(12, 20.0, 0.0)
+    # eps_alpha of a 20/20 tooth standard pair at 20 deg: 1.557 (Niemann & Winter, the usual example)
+    assert spur.transverse_contact_ratio(20, 20, 1.0, 20.0) == pytest.approx(1.557, abs=1e-3)
+    with pytest.raises(ValueError, match="zero-sum"):
+        spur.transverse_contact_ratio(12, 24, 2.0, 20.0, 0.3, 0.0)
+
+
+@pytest.mark.parametrize("name, x1", [("rv40e-81", 0.30), ("rv40e-105", 0.42), ("rv160n-81", 0.0)])
+def test_the_shipped_suns_carry_the_smallest_rounded_shift_free_of_undercut(name, x1):
+    from geometry import spur
+    s = load_case(CASES / f"{name}.toml").stage1
+    assert s.profile_shift == x1 and s.planet_profile_shift == -x1
+    x_min = spur.undercut_limit(s.z1, s.pressure_angle_deg)
+    assert x_min <= x1 < max(x_min, 0.0) + 0.01     # rounded up to the next hundredth (or none needed)
+
+
+@pytest.mark.parametrize("name, changes, words", [
+    # z1 = 12 unshifted: undercut (x_min 0.298), the issue-11 audit's finding
+    ("rv40e-81", dict(profile_shift=0.0), ["undercut below x1 = 0.298", "allowed x1 in [0.298, 0.404]"]),
+    # z2 = 24 planets at x2 = -0.45 < -0.404: undercut
+    ("rv40e-81", dict(profile_shift=0.45), ["planets (x2 = -x1) are undercut"]),
+    # z1 = 10 at x = 0.5: tip 0.199 m < 0.2 m (pointed) before the planets undercut (0.521)
+    ("rv40e-105", dict(profile_shift=0.5), ["thinner than 0.2 module (pointed)", "[0.415, 0.499]"]),
+    ("rv40e-81", dict(profile_shift=1.5), ["outside the allowed range [-1.0, 1.0]", "pointed"]),
+    # z1 = 6 at 20 deg: undercut below 0.649, pointed above ~0.2: no shift works
+    ("rv40e-81", dict(z1=6, z2=30), ["[stage1] z1 = 6", "no profile shift"]),
+])
+def test_an_undercut_or_pointed_stage1_is_a_one_line_error_naming_the_allowed_shift(name, changes, words):
+    data = raw(name)
+    data["stage1"] |= changes
+    with pytest.raises(CaseError) as exc:
+        case_from_dict(data, source="x.toml")
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith("x.toml: [stage1]")
+    for w in words:
+        assert w in msg

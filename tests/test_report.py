@@ -3,12 +3,18 @@ import json
 import re
 import shutil
 import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from pipeline.report import build_report, markdown_to_html
+from pipeline.report import build_report, json_to_html, markdown_to_html
 from pipeline.render import figure, save_figure
+
+REFS = Path(__file__).resolve().parent / "reference_images"
+sys.path.insert(0, str(REFS))
+import scenes  # noqa: E402  (tests/reference_images/scenes.py: the pictures' fixed scenes)
 
 
 @pytest.fixture()
@@ -23,15 +29,93 @@ def case_dir(tmp_path):
     return d
 
 
-def test_a_missing_stage_is_listed_as_not_built_and_present_ones_are_shown(case_dir):
+def test_a_missing_stage_is_said_in_neutral_text_and_present_ones_are_shown(case_dir):
     page = build_report(case_dir).read_text()
-    assert "not built (no hysteresis/ folder)" in page
+    assert "not built yet" in page and "class='missing'" not in page
+    assert "no bench records for this case" in page          # no diagnosis/ folder: not an error
     assert "<td>100</td>" in page and "../matrix/te.png" in page
+
+
+def test_the_page_opens_on_the_key_figures_beside_their_references(case_dir):
+    (case_dir / "hysteresis").mkdir()
+    (case_dir / "hysteresis" / "hysteresis.json").write_text(json.dumps(
+        {"torsional_rigidity_Nm_per_arcmin": 243.4, "lost_motion_arcmin": 0.904, "backlash_arcmin": 0.752}))
+    page = build_report(case_dir, rated_torque_Nm=412.0, ratio=81.0).read_text()
+    summary = page.index("Key figures beside their references")
+    assert summary < page.index("<h2 id='geometry'>")        # first, before every section
+    head = page[summary:page.index("<h2 id='geometry'>")]
+    assert "243 N m/arcmin" in head and "catalog RV-40E: 108 N m/arcmin" in head
+    assert "0.904 arcmin" in head and "catalog &lt;= 1 arcmin" in head
+    assert "paper 001: 19.20 / 19.03 / 19.49" not in head     # te_std.csv has no 400 N m row here
+    assert "no bench records for this case" in head
+    page = build_report(case_dir, rated_torque_Nm=1568.0, ratio=81.0).read_text()
+    assert "catalog RV-40E" not in page                      # another size: no borrowed reference
+
+
+def test_the_bench_rigidity_reference_comes_from_the_case_s_own_diagnosis(case_dir):
+    (case_dir / "hysteresis").mkdir()
+    (case_dir / "hysteresis" / "hysteresis.json").write_text(json.dumps({"torsional_rigidity_Nm_per_arcmin": 1305.0}))
+    (case_dir / "diagnosis").mkdir()
+    (case_dir / "diagnosis" / "diagnosis.json").write_text(json.dumps(
+        {"cause": "output_coaxiality", "findings": [], "baseline": {"residual_rms_arcsec": 80.7},
+         "extension": {"causes": ["output_coaxiality", "torsional_stiffness"], "residual_rms_arcsec": 10.3,
+                       "gain": 0.87, "holdout_gain": 0.86,
+                       "parameters": {"located_component": "carrier", "compliance_factor": 3.05,
+                                      "compliance_factor_ci95": [2.70, 3.46],
+                                      "rigidity_at_rated_Nm_per_arcmin": {"model": 871.4, "extended": 514.1}}}}))
+    page = build_report(case_dir, rated_torque_Nm=1568.0, ratio=81.0).read_text()
+    assert ("real bench (this case&#x27;s records, diagnosis) ~514 N m/arcmin tangent at rated (model 871): "
+            "carrier compliance x 3.05 [2.70, 3.46]") in page
+    assert "residual RMS 80.7 -&gt; 10.3 arcsec, gain 0.87, held-out 0.86" in page
+    assert "no bench records" not in page
+
+
+def test_figures_are_full_width_links_to_the_picture_with_a_caption(case_dir):
+    page = build_report(case_dir).read_text()
+    assert "<a href='../matrix/te.png'><img src='../matrix/te.png'" in page
+    assert "<figcaption>" in page and "click for full size" in page
+    assert "img{max-width:100%" in page and "figure{" in page      # one picture a row, up to the page width
 
 
 def test_markdown_pipe_tables_become_html_tables():
     out = markdown_to_html("# T\n\n| x | y |\n|---|---|\n| 1 | 2 |\n")
     assert "<th>x</th>" in out and "<td>2</td>" in out and "---" not in out
+
+
+def test_markdown_is_rendered_not_shown_raw():
+    out = markdown_to_html("**Forces:** from the\nlumped model, `te_std.csv`.\n\n- one\n- two\n")
+    assert "<b>Forces:</b> from the lumped model, <code>te_std.csv</code>." in out
+    assert out.count("<p>") == 1 and "<li>one</li><li>two</li>" in out and "**" not in out
+
+
+def test_a_table_row_keeps_its_cells_when_a_cell_holds_absolute_value_bars():
+    out = markdown_to_html("| a | b | c |\n|---|---|---|\n| 1 | 2 | 3 |\n| x | y |\n")
+    rows = re.findall(r"<tr>(.*?)</tr>", out)
+    assert [r.count("<th>") + r.count("<td>") for r in rows] == [3, 3, 3]   # short rows padded
+
+
+def test_json_artifacts_become_tables_not_dumps():
+    out = json_to_html({"made_from": {"x": 1}, "lost_motion_arcmin": 0.90412, "budget": {"pin_contact": 0.61},
+                        "curve": list(range(30)), "findings": [{"cause": "backlash", "score": 3.5}]})
+    assert "<pre>" not in out and "made_from" not in out
+    assert "<td>budget / pin_contact</td><td>0.61</td>" in out and "<td>0.9041</td>" in out
+    assert "30 values, 0 .. 29" in out and "<th>cause</th><th>score</th>" in out
+
+
+@pytest.mark.parametrize("name", sorted(scenes.SCENES))
+def test_each_picture_matches_its_reference_image(name, tmp_path):
+    """Drawn from fixed arrays and compared with tests/reference_images/<name>.png (regenerate with
+    `.venv/bin/python tests/reference_images/scenes.py` after an intended change, and look at it)."""
+    path = tmp_path / f"{name}.png"
+    scenes.SCENES[name](path)
+    err = scenes.rms_difference(path, REFS / f"{name}.png")
+    assert err < scenes.RMS_TOLERANCE, f"{name}.png differs from its reference: RMS {err:.2f} grey levels"
+
+
+def test_the_image_comparison_fails_on_a_broken_picture(tmp_path):
+    """The check can fail: the loop drawn mirrored (a sign error) is far outside the tolerance."""
+    scenes.hysteresis(tmp_path / "flipped.png", flip=True)
+    assert scenes.rms_difference(tmp_path / "flipped.png", REFS / "hysteresis.png") > 2 * scenes.RMS_TOLERANCE
 
 
 def _chromium():

@@ -63,7 +63,7 @@ def test_the_crankshaft_has_the_volume_of_its_cylinders(case):
 
 def test_the_crankshaft_layout_puts_journals_on_the_bearings_and_eccentrics_between(case):
     lay = solids.crankshaft_layout(case)
-    span, lj, w = 50.0, 10.0, 10.0              # rv40e-105 case file
+    span, lj, w = 50.0, 13.25, 10.0             # rv40e-105 case file (30203: T = 13.25)
     assert lay.journals_mm == ((-lj / 2, lj / 2), (span - lj / 2, span + lj / 2))
     assert lay.planet_seat_mm == (-3 * lj / 2, -lj / 2)
     assert lay.eccentrics_mm == ((span / 2 - w, span / 2), (span / 2, span / 2 + w))
@@ -72,7 +72,7 @@ def test_the_crankshaft_layout_puts_journals_on_the_bearings_and_eccentrics_betw
 
 
 def test_a_span_too_short_for_the_discs_is_refused(case):
-    with pytest.raises(CaseError, match=r"support_span_mm = 25.*allowed span >= 30"):
+    with pytest.raises(CaseError, match=r"support_span_mm = 25.*allowed span >= 33.25"):
         solids.crankshaft_layout(case.replace("crankshaft", support_span_mm=25.0))
 
 

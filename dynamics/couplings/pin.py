@@ -6,13 +6,24 @@ radius r_k, both with case.errors applied) is mapped into the disc frame and its
 found by `geometry.pin_profile.foot_point` (Newton seeded at the conjugate-pose parameter
 alpha_d - theta_k, microradians off under load: 2-3 iterations, never the neighbouring lobe).
 gap = s + Rr - r_k (s the signed distance from c along the outward normal); approach = -gap.
-Law (fem.stiffness.pin_contact, FE, by pin phase from the line of centres, interpolated):
-F = k(phase) approach^n, V = k approach^(n+1) / (n+1); the law's phase dependence is not
+Law (fem.stiffness.pin_law: the tooth-pair FE with the disc body and the pin's housing groove in
+series, refitted; by pin phase from the line of centres, interpolated): F = k(phase) approach^n, V = k approach^(n+1) / (n+1); the law's phase dependence is not
 differentiated (f departs from -grad V by ~2e-4 of the largest force at 300 N m,
 tests/test_couplings.py), nor is the profile curvature in the tangent. Damping beta k_t g', ramped in over
 DAMP_RAMP_M of approach; a damped contact cannot pull (force clipped at 0).
 The contacts are the work's candidate contacts: the time integration skips pins found open by
 more than a margin (dynamics.kernels.CANDIDATE_MARGIN_M); w.gap / w.force hold gap and force.
+As-built errors (case.errors, geometry.params.Errors), all through this same gap and law:
+  pins   uniform radius / circle radius, per-pin radial, tangential and radius, pin-ring radial
+         lobes: the pin centres and radii of `pins`; pin support (groove) stiffness lobes: a
+         multiplier on each pin's law (column 4 of `pins`; the whole series law is scaled, ASSUMED:
+         the refitted law does not separate the groove's share);
+  discs  disc-to-disc phase (disc 2's profile turned), uniform profile error per disc (material
+         added closes the gap), cumulative pitch lobes (the profile turned locally by
+         amplitude / R) and profile lobes (normal), both read at the polar angle of the pin centre
+         in the disc's profile frame (the tooth space it sits in; a pattern of m <= zc / 2 lobes
+         varies slowly over a tooth). The lobes' own dependence on that angle is left out of the
+         gradient (relative size m amplitude / R, < 1e-3 for 10 um).
 """
 from __future__ import annotations
 
@@ -22,6 +33,8 @@ from typing import NamedTuple
 import numpy as np
 
 from dynamics.couplings.base import foot_point, interp2, kernel, ramp
+from fem.stiffness import pin_law
+from geometry.params import lobe_sum
 
 NAME = "pin"
 GAP_LIMIT_M = 1e-3     # a foot point farther than this from the pin-centre curve is lost geometry
@@ -32,9 +45,12 @@ class Params(NamedTuple):
     Rr_m: float                    # pin radius of the profile, Rr + dRr
     E_m: float                     # eccentricity of the profile
     zp: float                      # pins
-    pins: np.ndarray               # (zp, 4) actual pins: x [m], y [m], radius [m], angle [rad]
+    pins: np.ndarray               # (zp, 5) actual pins: x [m], y [m], radius [m], angle [rad], law factor
     law: np.ndarray                # (P, 3) pin phase [deg], k [N/m^n], n
     disc_rotation_rad: np.ndarray  # (nd,) profile rotation in each disc's body frame
+    disc_profile_m: np.ndarray     # (nd,) uniform profile error, + material added
+    disc_pitch: np.ndarray         # (nd, L, 3) cumulative pitch lobes: m, amplitude [rad], phase [rad]
+    disc_profile_lobes: np.ndarray  # (nd, L2, 3) profile lobes: m, amplitude [m], phase [rad]
     dof: np.ndarray                # (nd, 3) disc x, y, rotation
     c0: int                        # offset of the (nd, zp) contacts in the work's contact arrays
 
@@ -43,19 +59,40 @@ def params(case, stiffness, layout, slots) -> Params:
     cy, mod, er = case.cycloid, case.modification, case.errors
     zp, nd = cy.zp, cy.disc_count
     th = 2 * np.pi * np.arange(zp) / zp
-    Rp = cy.pin_circle_radius_mm * 1e-3 + er.pin_circle_radius_um * 1e-6
-    rp = cy.pin_radius_mm * 1e-3 + er.pin_radius_um * 1e-6
-    pc = stiffness.pin_contact
+    each = lambda v: np.asarray(v, float) * 1e-6 if len(v) else np.zeros(zp)  # noqa: E731
+    Rp = cy.pin_circle_radius_mm * 1e-3 + er.pin_circle_radius_um * 1e-6 + each(er.per_pin_radial_um) \
+        + 1e-6 * lobe_sum(er.pin_radial_lobes, 0, th)
+    tp = each(er.per_pin_tangential_um)
+    rp = cy.pin_radius_mm * 1e-3 + er.pin_radius_um * 1e-6 + each(er.per_pin_radius_um)
+    factor = 1.0 + np.zeros(zp) + lobe_sum(er.pin_stiffness_lobes, 0, th)
+    R_disc = cy.pin_circle_radius_mm * 1e-3      # pitch errors are tangential at the pin circle
+    pos, k_law, n_law, _ = pin_law(stiffness)
     disc = layout["disc"]
     return Params(
         R_m=(cy.pin_circle_radius_mm + mod.offset_mm) * 1e-3,
         Rr_m=(cy.pin_radius_mm + mod.equidistant_mm) * 1e-3,
         E_m=cy.eccentricity_mm * 1e-3, zp=float(zp),
-        pins=np.column_stack([Rp * np.cos(th), Rp * np.sin(th), np.full(zp, rp), th]),
-        law=np.column_stack([pc.position_deg, pc.law_k_N_per_m_pow, pc.law_n]).astype(float),
-        disc_rotation_rad=np.deg2rad(mod.rotation_deg) + np.pi * np.arange(nd),
+        pins=np.column_stack([Rp * np.cos(th) - tp * np.sin(th), Rp * np.sin(th) + tp * np.cos(th), rp, th,
+                              factor]),
+        law=np.column_stack([pos, k_law, n_law]).astype(float),
+        disc_rotation_rad=np.deg2rad(mod.rotation_deg) + np.pi * np.arange(nd)
+        + np.array([0.0, er.disc_phase_um * 1e-6 / R_disc])[:nd],
+        disc_profile_m=np.broadcast_to(np.asarray(er.disc_profile_um, float) * 1e-6, (nd,)).copy(),
+        disc_pitch=_disc_lobes(er.disc_pitch_lobes, nd, 1e-6 / R_disc),
+        disc_profile_lobes=_disc_lobes(er.disc_profile_lobes, nd, 1e-6),
         dof=np.column_stack([disc.indices("x"), disc.indices("y"), disc.indices("rot")]).astype(np.int64),
         c0=slots.contacts("pin", (nd, zp), group=np.repeat(np.arange(nd), zp)))
+
+
+def _disc_lobes(rows, nd: int, scale: float) -> np.ndarray:
+    """(nd, L, 3): m, amplitude * scale, phase [rad] from rows [disc, m, amplitude, phase_deg]
+    (a disc with fewer rows padded with zero amplitude)."""
+    per = [[r for r in rows if r[0] == d + 1] for d in range(nd)]
+    out = np.zeros((nd, max(len(x) for x in per), 3))
+    for d, rs in enumerate(per):
+        for i, (_, m, a, ph) in enumerate(rs):
+            out[d, i] = m, a * scale, np.radians(ph)
+    return out
 
 
 @kernel(inline=True)
@@ -70,8 +107,9 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     for d in range(dof.shape[0]):
         ix, iy, ia = dof[d, 0], dof[d, 1], dof[d, 2]
         cx, cy, al = q[ix], q[iy], q[ia] + p.disc_rotation_rad[d]
-        ca, sa = math.cos(al), math.sin(al)
+        ca0, sa0 = math.cos(al), math.sin(al)
         psi = math.atan2(cy, cx)
+        npitch, nprof = p.disc_pitch.shape[1], p.disc_profile_lobes.shape[1]
         for k in range(npin):
             c = p.c0 + d * npin + k
             if not active[c]:
@@ -79,11 +117,29 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
                 continue
             Px, Py, rp, thk = pins[k, 0], pins[k, 1], pins[k, 2], pins[k, 3]
             wx, wy = Px - cx, Py - cy
+            ca, sa, alk = ca0, sa0, al
             pbx, pby = ca * wx + sa * wy, -sa * wx + ca * wy
-            t, s, nx, ny, kappa, okk = foot_point(pbx, pby, R, E, zp, al - thk)
+            dprof = p.disc_profile_m[d]
+            if npitch + nprof > 0:           # the disc's patterns at the tooth space of this pin
+                phi = math.atan2(pby, pbx)
+                dal = 0.0
+                for i in range(npitch):
+                    dal += p.disc_pitch[d, i, 1] * math.cos(p.disc_pitch[d, i, 0] * phi - p.disc_pitch[d, i, 2])
+                for i in range(nprof):
+                    dprof += p.disc_profile_lobes[d, i, 1] * math.cos(p.disc_profile_lobes[d, i, 0] * phi
+                                                                      - p.disc_profile_lobes[d, i, 2])
+                if dal != 0.0:               # the profile turned locally by the cumulative pitch
+                    alk = al + dal
+                    ca, sa = math.cos(alk), math.sin(alk)
+                    pbx, pby = ca * wx + sa * wy, -sa * wx + ca * wy
+            # seed wrapped into [-pi, pi): at |t| > 3 pi the foot point's 1e-14 rad test nears the
+            # float spacing of t and fails (2e-4 of the calls at 3-5 pi, 9 % beyond 20 pi; issue 12)
+            seed = alk - thk
+            seed -= 2.0 * math.pi * math.floor(seed / (2.0 * math.pi) + 0.5)
+            t, s, nx, ny, kappa, okk = foot_point(pbx, pby, R, E, zp, seed)
             if not okk or abs(s) > GAP_LIMIT_M:
                 ok = False
-            gap = s + Rr - rp
+            gap = s + Rr - rp - dprof
             gaps[c] = gap
             forces[c] = 0.0
             if gap >= 0.0:
@@ -93,6 +149,7 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             ph = (thk - psi) * 180.0 / math.pi
             ph = abs(ph - 360.0 * math.floor((ph + 180.0) / 360.0))
             kk, nn = interp2(ph, law)
+            kk *= pins[k, 4]
             app = -gap
             F = kk * app ** nn
             kt = nn * kk * max(app, 1e-10) ** (nn - 1.0)

@@ -7,7 +7,9 @@ its records), X_c the model's signature columns of cause c (unit parameter), row
 candidate with the largest drop in chi^2 is tested with a partial F-test,
 F = (dchi2 / q_c) / (chi2_full / (n - p)), which stays valid when the floor estimate is off by a
 common factor; it enters when p < p_enter (Bonferroni over the candidates still out). A cause
-must also explain at least `min_share` of the weighted residual power left after the offsets.
+must also explain at least `min_share` of the weighted residual power left at its step (the
+power the causes already named leave: a 1x line of 60 arcsec must not hide a 5 arcsec cause; its
+effect size in arcsec is judged by the extension against the records' noise floor).
 Where another candidate explains the same features nearly as well (within `ambiguity` of its
 dchi2) both are reported: the evidence cannot separate them (e.g. two zp x sources).
 Limits: linear in the parameters (unit-size signatures); diagnose.py refines on the full model.
@@ -91,7 +93,7 @@ def match(y: np.ndarray, w: np.ndarray, X_off: np.ndarray, causes: list[CauseCol
         dof = max(n - p_full, 1)
         F = ((chi2_now - trials[best]) / q) / max(trials[best] / dof, 1e-300)
         p = stats.f.sf(F, q, dof) * len(out)
-        if p >= p_enter or (chi2_now - trials[best]) < min_share * chi2_off:
+        if p >= p_enter or (chi2_now - trials[best]) < min_share * chi2_now:
             break
         chosen.append(best)
 

@@ -58,6 +58,34 @@ def _plot_orders(diag, path, case):
     render.save_figure(fig, path)
 
 
+def conditions(diag) -> list[dict]:
+    """Per record: its condition (speed, oil temperature from `# oil_temperature_C:`, torque,
+    direction, encoder zero), its role and its residual RMS before and after the extension."""
+    held = set(diag.extension.held_out) if diag.extension is not None else set()
+    out = []
+    for k, (r, g) in enumerate(zip(diag.records, diag.groups)):
+        after = diag.residual_after[k] if diag.residual_after is not None else None
+        out.append({"record": r.name, "input_speed_rpm": r.comment_value("input_speed_rpm") or r.input_speed_rpm,
+                    "oil_temperature_C": r.comment_value("oil_temperature_C"), "torque_Nm": r.torque_Nm,
+                    "direction": "forward" if r.direction > 0 else "backward", "zero_group": g,
+                    "role": "held out" if r.name in held else "fitted",
+                    "rms_before_arcsec": float(np.sqrt(np.mean(diag.residual_before[k] ** 2))),
+                    "rms_after_arcsec": None if after is None else float(np.sqrt(np.mean(after ** 2)))})
+    return out
+
+
+def _conditions_table(diag) -> str:
+    e = html.escape
+    num = lambda v, f: "n/a" if v is None else format(v, f)   # noqa: E731
+    rows = "".join(f"<tr><td>{e(c['record'])}</td><td>{c['input_speed_rpm']:.0f}</td>"
+                   f"<td>{num(c['oil_temperature_C'], 'g')}</td><td>{c['torque_Nm']:+g}</td><td>{c['direction']}</td>"
+                   f"<td>{e(c['zero_group'])}</td><td>{c['role']}</td><td>{c['rms_before_arcsec']:.2f}</td>"
+                   f"<td>{num(c['rms_after_arcsec'], '.2f')}</td></tr>" for c in conditions(diag))
+    return ("<table border=1><tr><th>record</th><th>input rpm</th><th>oil &deg;C</th><th>torque N.m</th>"
+            "<th>direction</th><th>encoder zero</th><th>role</th><th>residual RMS before</th>"
+            f"<th>after (arcsec; one offset per zero)</th></tr>{rows}</table>")
+
+
 def _page(diag, case) -> str:
     e = html.escape
     rows = "".join(f"<tr><td>{e(f.cause)}</td><td>{f.score:.3f}</td><td>{e(f.evidence)}</td></tr>"
@@ -80,16 +108,20 @@ def _page(diag, case) -> str:
         lines += f"<li>{e(rec.name)}: {items or 'none'}</li>"
     sig = "".join(f"<tr><td>{e(s.cause)}</td><td>{e(str(list(s.orders)[:8]))}</td>"
                   f"<td>{e(', '.join(f'{a:.3g}' for a in s.line_arcsec[:8]))}</td></tr>" for s in diag.summaries)
-    recs = "".join(f"<li>{e(r.name)}: {r.input_speed_rpm:.0f} rpm, {r.torque_Nm:+g} N.m, "
-                   f"{'forward' if r.direction > 0 else 'backward'}, zero group {e(g)}</li>"
-                   for r, g in zip(diag.records, diag.groups))
+    notes = "".join(f"<li>{e(n)}</li>" for n in diag.notes) or "<li>none</li>"
+    if ext is not None and ext.effect_arcsec:
+        ext_html += "<p>effect of each cause on the fitted records (RMS, offsets removed; noise floor " \
+                    f"{diag.noise_arcsec:.3g} arcsec): " + ", ".join(
+                        f"{e(c)} {v:.3g} arcsec" for c, v in ext.effect_arcsec.items()) + "</p>"
+    recs = _conditions_table(diag)
     return f"""<!doctype html><html><head><meta charset="utf-8"><title>diagnosis {e(case.name)}</title></head>
 <body><h1>Diagnosis: {e(case.name)}</h1>
 <p>cause: <b>{e(str(diag.cause))}</b>; baseline residual RMS {diag.residual_rms_arcsec:.2f} arcsec,
 peak-to-peak {diag.residual_pp_arcsec:.2f} arcsec (one free offset per encoder zero removed)</p>
-<h2>Records</h2><ul>{recs}</ul>
+<h2>Records and residuals per condition</h2>{recs}
 <h2>Findings</h2><table border=1><tr><th>cause</th><th>score</th><th>evidence</th></tr>{rows}</table>
 <h2>Extension</h2>{ext_html}
+<h2>Notes (input checks, causes not reported, residual left)</h2><ul>{notes}</ul>
 <h2>Residual in time</h2><img src="residual_time.png" alt="residual TE over output travel, before and after">
 <h2>Residual in orders</h2><img src="residual_orders.png" alt="residual order spectra, before and after">
 <h2>Significant residual lines (false-alarm 1e-3 per record)</h2><ul>{lines}</ul>

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dynamics.spectrum import OrderSpectrum
+from pipeline.diagnosis.orders import spectrum_of
 
 _RAYLEIGH_MEDIAN = np.sqrt(2.0 * np.log(2.0))
 
@@ -50,3 +51,30 @@ def test_lines(spec: OrderSpectrum, orders, p_fa: float = 1e-3, half_window: int
         p = float(np.exp(-a * a / (2.0 * sigma * sigma)))
         out.append(Line(float(spec.order[idx]), a, sigma, p, p * max(len(orders), 1) < p_fa))
     return out
+
+
+# ASSUMED: no bench resolves TE below a tenth of the +-1 arcsec accuracy grade of the best absolute
+# angle encoders (Heidenhain RCN 8000 class); an effect smaller than this is not measurable.
+MIN_NOISE_ARCSEC = 0.1
+
+
+def sample_noise(output_angle_deg, signal) -> float:
+    """Std of the broadband noise of one record [signal units], from its order spectrum's floor:
+    the median Rayleigh scale over the bins (lines are few among them) gives, for white noise on
+    N samples, sigma_n = sigma_R sqrt(N / 2) (Parseval), N the samples the spectrum rests on (the
+    record's own over its whole revolutions, at most the resampled grid's)."""
+    spec = spectrum_of(output_angle_deg, signal)
+    travel = abs(float(output_angle_deg[-1] - output_angle_deg[0]))
+    n = min(len(signal) * min(spec.revolutions * 360.0 / max(travel, 1e-12), 1.0), 2 * (len(spec.amplitude) - 1))
+    amp = spec.amplitude[1:int(n // 4) + 1]      # bins to half the record's own Nyquist order:
+    # the angle resampling's linear interpolation attenuates the upper half
+    if amp.size < 4:
+        return 0.0
+    return float(np.median(amp) / _RAYLEIGH_MEDIAN) * float(np.sqrt(n / 2.0))
+
+
+def noise_floor_arcsec(records, residuals) -> float:
+    """The records' noise floor: RMS over the records of their broadband noise (sample_noise), at
+    least MIN_NOISE_ARCSEC."""
+    s = [sample_noise(r.output_angle_deg, x) for r, x in zip(records, residuals)]
+    return max(float(np.sqrt(np.mean(np.square(s)))) if s else 0.0, MIN_NOISE_ARCSEC)

@@ -19,6 +19,9 @@ _MODULES = (
     "crank_hole_position_error",
     "torsional_stiffness",
     "backlash",
+    "pin_ring_pattern",
+    "housing_stiffness_pattern",
+    "disc_cumulative_pitch",
 )
 
 CAUSES: tuple[Cause, ...] = tuple(import_module(f"{__name__}.{m}").CAUSE for m in _MODULES)

@@ -51,8 +51,8 @@ class Backlash(Cause):
                 "backlash_arcmin_ci95": sorted(ci(um * per, float(fit.sd[0]) * abs(per), fit.tq))}
 
     def evidence(self, ev: Evidence) -> str:
-        return (f"{ev.prefix}a backward-minus-forward mean TE gap the model does not have, the same at "
-                f"every torque ({ev.pair_gaps_text()}): lost motion at the reversal of motion, as the "
+        return (f"{ev.prefix}a backward-minus-forward mean TE gap the model does not have "
+                f"({ev.pair_gaps_text()}; the model's is the same at every torque): lost motion at the reversal of motion, as the "
                 f"model's pin-clearance signature.")
 
     def draw(self, rng, case):

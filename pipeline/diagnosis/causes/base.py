@@ -10,10 +10,14 @@ reported parameters (diagnosis.json units), `evidence` writes the finding's sent
 
 `dc_even`: the mean-TE response depends on |p| only (a rectified threshold response): no linear
 column carries it, so the cause is named on its order lines alone and its Jacobian columns are
-re-taken by the model during the extension fit (diagnose.py).
+re-taken by the model during the extension fit (extension.py); `nonlinear` asks for the latter
+alone (a response far from linear over the parameter's range, e.g. exp(u)).
 Bounds: the physical range of each parameter (a negative clearance, a negative stiffness are
-outside); carried for the fits and checked after them (diagnose.Extension.outside_bounds), not yet
-enforced by the solver.
+outside), enforced by the extension fit (extension.py: the model never sees a value outside; a
+cause whose fit sits on a bound or is pulled past it is not reported). Parameterise so that every
+value inside the bounds is a valid model (e.g. the log of a stiffness factor).
+Evidence sentences quote only what the records hold: the torques of the records compared, and
+trends computed from the numbers (`trend`), never asserted.
 """
 from __future__ import annotations
 
@@ -22,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.diagnosis.orders import spectrum_of
+from pipeline.diagnosis.significance import noise_sigma
 
 
 @dataclass(frozen=True)
@@ -70,6 +75,7 @@ class Evidence:
     groups: tuple
     residuals: tuple
     summary: object                  # signatures.SignatureSummary
+    stiffness: object = None         # the model's stiffness (fem.stiffness.StiffnessModel)
 
     @property
     def prefix(self) -> str:
@@ -82,30 +88,79 @@ class Evidence:
         return (f"; {', '.join(a for a, _ in alts)} fits the same lines about as well (the "
                 f"records cannot separate them)") if alts else ""
 
-    def line_amplitudes(self, order: float) -> list[tuple[float, float]]:
-        """(|torque|, residual line amplitude at `order`) per record, in record order."""
-        return [(abs(rec.torque_Nm), spectrum_of(rec.output_angle_deg, r).at(order))
-                for rec, r in zip(self.records, self.residuals)]
+    def line_amplitudes(self, order: float) -> list[tuple[float, float, float]]:
+        """(|torque|, residual line amplitude at `order`, its noise sigma) per record, in record order."""
+        out = []
+        for rec, r in zip(self.records, self.residuals):
+            sp = spectrum_of(rec.output_angle_deg, r)
+            k = int(np.argmin(np.abs(sp.order - order)))
+            out.append((abs(rec.torque_Nm), float(sp.amplitude[k]), noise_sigma(sp.amplitude, k)))
+        return out
 
     def line_by_torque(self, order: float) -> str:
-        return ", ".join(f"{a:.2f} at {t:g} N.m" for t, a in sorted(self.line_amplitudes(order)))
+        """'a at T N.m, ...' then the trend the numbers show (never a trend they do not)."""
+        amps = sorted(self.line_amplitudes(order))
+        text = ", ".join(f"{a:.2f} arcsec at {t:g} N.m" for t, a, _ in amps)
+        return f"{text}; {trend([(t, a) for t, a, _ in amps], max(s for *_, s in amps))}"
 
     def pair_gaps(self) -> list[tuple[float, float]]:
-        """(median |torque|, backward-minus-forward mean residual) per zero group holding both."""
+        """(|torque|, backward-minus-forward mean residual) per zero group and torque level holding
+        both directions: the torques quoted are those of the records compared, nothing in between."""
         recs, groups, resid = self.records, self.groups, self.residuals
         out = []
         for g in dict.fromkeys(groups):
             idx = [k for k in range(len(recs)) if groups[k] == g]
-            fw = [k for k in idx if recs[k].direction > 0]
-            bw = [k for k in idx if recs[k].direction < 0]
-            if fw and bw:
-                gap = np.mean([resid[k].mean() for k in bw]) - np.mean([resid[k].mean() for k in fw])
-                out.append((float(np.median([abs(recs[k].torque_Nm) for k in idx])), float(gap)))
+            for level in torque_levels([abs(recs[k].torque_Nm) for k in idx]):
+                at = [k for k in idx if abs(abs(recs[k].torque_Nm) - level) <= TORQUE_TOL_NM]
+                fw = [k for k in at if recs[k].direction > 0]
+                bw = [k for k in at if recs[k].direction < 0]
+                if fw and bw:
+                    gap = np.mean([resid[k].mean() for k in bw]) - np.mean([resid[k].mean() for k in fw])
+                    t = float(np.mean([abs(recs[k].torque_Nm) for k in at]))
+                    out.append((t, float(gap)))
         return sorted(out)
 
     def pair_gaps_text(self) -> str:
-        return ", ".join(f"{g:+.1f} arcsec at {t:g} N.m" for t, g in self.pair_gaps()) \
-            or "no forward/backward pair"
+        """The gaps, then their trend with torque (computed, as line_by_torque)."""
+        gaps = self.pair_gaps()
+        if not gaps:
+            return "no forward/backward pair"
+        return ", ".join(f"{g:+.1f} arcsec at {t:g} N.m" for t, g in gaps) + f"; {trend(gaps)}"
+
+
+TORQUE_TOL_NM = 5.0   # two records within this |torque| are at one torque level (zeros.py's pairing)
+
+
+def torque_levels(torques) -> list[float]:
+    """Distinct |torque| levels (within TORQUE_TOL_NM), lowest first."""
+    levels: list[float] = []
+    for t in sorted(torques):
+        if not levels or t - levels[-1] > TORQUE_TOL_NM:
+            levels.append(float(t))
+    return levels
+
+
+def trend(points, sigma: float = 0.0) -> str:
+    """What values (|torque|, a) do with torque, from the numbers: 'about the same at every torque'
+    when they agree within 25 % of the largest magnitude or 3 noise sigma, 'growing' or 'falling'
+    when they move monotonically with torque (magnitudes when all share a sign; a step back within
+    that tolerance still counts), 'varying' otherwise; a single torque level says so."""
+    levels = torque_levels([t for t, _ in points])
+    if len(levels) < 2:
+        return f"one torque level only ({levels[0]:g} N.m), no trend" if levels else "no record"
+    a = np.array([np.mean([v for t, v in points if abs(t - lv) <= TORQUE_TOL_NM]) for lv in levels])
+    if np.all(a <= 0):
+        a = -a
+    tol = max(3.0 * sigma, 0.25 * float(np.max(np.abs(a))))
+    if a.max() - a.min() <= tol:
+        return "about the same at every torque"
+    d = np.diff(a)
+    step = max(3.0 * sigma, 0.1 * float(np.max(np.abs(a))))
+    if np.all(d >= -step):
+        return "growing with torque"
+    if np.all(d <= step):
+        return "falling with torque"
+    return "varying with torque"
 
 
 class Cause:
@@ -116,6 +171,7 @@ class Cause:
     signature: str = ""              # one line: orders, load and direction dependence expected
     unit_size: float = 1.0           # signature step, parameter units (same for every parameter)
     dc_even: bool = False
+    nonlinear: bool = False          # far from linear over its range: Jacobian re-taken in the fit
 
     def params(self, case) -> tuple[Param, ...]:
         raise NotImplementedError
@@ -157,3 +213,36 @@ def per_crank(case, key: str, delta: np.ndarray) -> tuple:
     base = np.asarray(getattr(case.errors, key), float)
     base = np.broadcast_to(base, (case.carrier.crank_count,)) if base.size == 1 else base
     return tuple(float(v) for v in base + delta)
+
+
+def lobe_rows(harmonics, p) -> list[list[float]]:
+    """Lobe rows [m, amplitude, phase_deg] (geometry.params.Errors) from p = (c_m, s_m) per
+    harmonic m: c cos(m theta) + s sin(m theta) = a cos(m theta - phase)."""
+    p = np.asarray(p, float).reshape(len(harmonics), 2)
+    return [[int(m), float(np.hypot(c, s)), float(np.degrees(np.arctan2(s, c)))]
+            for m, (c, s) in zip(harmonics, p)]
+
+
+def lobe_params(prefix: str, unit: str, harmonics, bound: float) -> tuple[Param, ...]:
+    """(c_m, s_m) per harmonic m, each within +-bound."""
+    return tuple(Param(f"{prefix}_m{m}_{part}_{unit}", unit, (-bound, bound))
+                 for m in harmonics for part in ("cos", "sin"))
+
+
+def lobe_report(prefix: str, unit: str, harmonics, fit: Fitted) -> dict:
+    """Amplitude and phase per harmonic with delta-method 95 % intervals (polar)."""
+    out: dict = {f"{prefix}_harmonics": [int(m) for m in harmonics]}
+    for j, m in enumerate(harmonics):
+        sl = slice(2 * j, 2 * j + 2)
+        a, a_ci, ph, ph_ci = polar(fit.p[sl], fit.cov[sl, sl], fit.tq)
+        out.update({f"{prefix}_m{m}_{unit}": a, f"{prefix}_m{m}_{unit}_ci95": a_ci,
+                    f"{prefix}_m{m}_phase_deg": ph, f"{prefix}_m{m}_phase_deg_ci95": ph_ci})
+    return out
+
+
+def lobe_draw(rng, harmonics, j: int, lo: float, hi: float) -> tuple[np.ndarray, float, float]:
+    """Lobe harmonics[j] alone, |a| uniform in [lo, hi], any phase: (p, a, phase_deg)."""
+    p = np.zeros(2 * len(harmonics))
+    a, ph = rng.uniform(lo, hi), rng.uniform(-180.0, 180.0)
+    p[2 * j:2 * j + 2] = a * np.cos(np.radians(ph)), a * np.sin(np.radians(ph))
+    return p, float(a), float(ph)

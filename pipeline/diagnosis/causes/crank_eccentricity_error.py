@@ -82,7 +82,7 @@ class CrankEccentricityError(Cause):
     def evidence(self, ev: Evidence) -> str:
         zp = self.orders(ev.case)[0]
         return (f"{ev.prefix}residual line at the crankshaft order zp = {zp}x ({ev.line_by_torque(zp)} "
-                f"arcsec, about the same at every torque, unlike a stiffness effect): the model's "
+                f"; the model's line is nearly the same at every torque, unlike a stiffness effect): the model's "
                 f"signature of an eccentric of one crankshaft off its radius, which turns one disc "
                 f"against the other once per crank revolution (orders {list(ev.summary.orders)[:4]}). "
                 f"Caution: zp x is also the order of a disc-tooth or crank-hole pattern error of one "

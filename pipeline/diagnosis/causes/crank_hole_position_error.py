@@ -53,8 +53,8 @@ class CrankHolePositionError(Cause):
     def evidence(self, ev: Evidence) -> str:
         k = self.orders(ev.case)[0]
         return (f"{ev.prefix}residual line at twice the crankshaft order, 2 zp = {k}x "
-                f"({ev.line_by_torque(k)} arcsec, falling with torque) with a shift toward less lost "
-                f"motion: the model's signature of a crank-hole position pattern on both discs (the "
+                f"({ev.line_by_torque(k)}; the model's line falls with torque) with a shift toward less "
+                f"lost motion: the model's signature of a crank-hole position pattern on both discs (the "
                 f"two discs, 180 deg apart, cancel the zp x line; the rectified part remains; orders "
                 f"{list(ev.summary.orders)[:4]}); an eccentric or disc-tooth error of one disc would "
                 f"show at zp x instead{ev.alternatives}.")

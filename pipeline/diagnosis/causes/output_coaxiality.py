@@ -41,12 +41,10 @@ class OutputCoaxiality(Cause):
                 "output_coaxiality_phase_deg": ph, "output_coaxiality_phase_deg_ci95": ph_ci}
 
     def evidence(self, ev: Evidence) -> str:
-        amps = ev.line_amplitudes(1.0)
-        a1 = ", ".join(f"{a:.1f}" for _, a in amps)
-        tq = ", ".join(f"{t:g}" for t, _ in amps)
-        return (f"{ev.prefix}a once-per-output-revolution residual line of {a1} arcsec at {tq} N.m "
-                f"(about the same at every torque) matches the model's coaxiality signature "
-                f"(orders {list(ev.summary.orders)[:3]}, load-independent); no other source puts a 1x line there.")
+        return (f"{ev.prefix}a once-per-output-revolution residual line ({ev.line_by_torque(1.0)}) "
+                f"as the model's coaxiality signature (orders {list(ev.summary.orders)[:3]}, "
+                f"load-independent); among the registered causes no other puts a 1x line there"
+                f"{ev.alternatives}.")
 
     def draw(self, rng, case):
         e, ph = rng.uniform(5.0, 25.0), rng.uniform(-180.0, 180.0)

@@ -1,0 +1,325 @@
+"""The extension: the named causes' parameters fitted with the model in the loop, within bounds.
+
+scipy.optimize.least_squares on the records' features (features.py) with one free offset per zero
+group; the Jacobian comes from the signature library (a linearisation the solver uses for its
+steps only; a threshold cause's columns are re-taken by the model at each iterate).
+Bounds: every model the fit evaluates has each parameter inside its cause's physical range
+(`Param.bounds`): p = clip(V z) before `apply`, and parameters that map one to one onto a fit
+coordinate are bounded in the solver too (trust-region reflective). A cause whose fitted
+parameter sits on its bound, or whose parameter the records pull past it (one unbounded
+Gauss-Newton step from the fit: the records ask for more than physics allows, a negative
+clearance, a stiffness beyond 20 x the model), or whose effect on the fitted records (RMS of the TE it adds,
+zero offsets removed) is below the records' noise floor (significance.noise_floor_arcsec), or
+that the fitted records cannot determine (its columns there are a constant offset, or its 95 %
+interval is wider than its physical range), is dropped with a one-line note and the rest
+refitted: it is never reported.
+gain = 1 - rms_after / rms_before on the fitted records, holdout_gain the same on the held-out
+ones; 95 % confidence intervals from the final Jacobian and the scaled residual variance
+(linearised; t quantile on the residual dof); each cause's `report` turns its fitted model
+parameters into the reported ones.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize, stats
+
+from pipeline.diagnosis.causes.base import Fitted
+from pipeline.diagnosis.zeros import offset_columns, remove_offsets, rms
+
+REFRESH_STEP = 0.3   # forward-difference step of a re-taken Jacobian column, in library units
+START_SCALES = (0.5, 0.75, 1.0, 1.5)   # coarse scan of a threshold/nonlinear cause's linear start
+AT_BOUND = 1e-3      # a parameter this close to a bound (share of its range) sits on it
+
+
+@dataclass(frozen=True)
+class Extension:
+    causes: tuple[str, ...]
+    parameters: dict
+    residual_rms_arcsec: float       # after, fitted records
+    rms_before_arcsec: float         # before, fitted records
+    gain: float
+    holdout_gain: float | None
+    fitted: tuple[str, ...]
+    held_out: tuple[str, ...]
+    outside_bounds: tuple[str, ...] = ()   # kept for callers: the bounded fit leaves it empty
+    effect_arcsec: dict | None = None      # cause -> RMS of the TE it adds on the fitted records
+    model_parameters: dict | None = None   # cause -> {model parameter: value}: what `compensate` rebuilds
+
+
+@dataclass(frozen=True)
+class Run:
+    """What the extension needs of one diagnosis run."""
+    case: object
+    stiffness: object
+    records: list
+    groups: list
+    meas: list                       # measured TE per record [arcsec]
+    te_of: object                    # (case, stiffness, idx=None) -> simulated TE per record
+    te_model: object
+    fmaps: list
+    w: np.ndarray
+    noise_arcsec: float              # the records' noise floor (effect sizes below it: dropped)
+
+
+def extend(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int):
+    """Fit `chosen` (cause objects), dropping causes on a bound or below the noise floor and
+    refitting the rest; (Extension or None, residuals after or None, notes, dropped ids)."""
+    notes, dropped = [], []
+    blind = _unidentifiable(run, chosen, cols, fit_idx)
+    for c in blind:
+        notes.append(f"{c.id}: not identifiable on the fitted records ({', '.join(run.records[k].name for k in fit_idx)}): "
+                     f"there its effect is a constant offset, which each encoder zero absorbs; not reported")
+    dropped.extend(c.id for c in blind)
+    chosen = [c for c in chosen if c not in blind]
+    while chosen:
+        ext, after, reasons, note = _fit(run, chosen, cols, fit_idx, hold_idx, max_nfev)
+        if note:
+            notes.append(note)
+        bad = [c for c in chosen if reasons[c.id]]
+        if not bad:
+            return ext, after, notes, dropped
+        notes.extend(f"{c.id}: {reasons[c.id]}; not reported" for c in bad)
+        dropped.extend(c.id for c in bad)
+        chosen = [c for c in chosen if c not in bad]
+    return None, None, notes, dropped
+
+
+def _unidentifiable(run: Run, chosen, cols, fit_idx, rel: float = 0.01):
+    """Causes whose columns on the fitted records lie in the zero offsets' span but for `rel` of
+    their weighted norm (what is left is a model detail, not evidence)."""
+    starts = np.r_[0, np.cumsum([fm.size for fm in run.fmaps])]
+    rows = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in fit_idx])
+    O = offset_columns(run.fmaps, run.groups, fit_idx) * run.w[rows][:, None]
+    out = []
+    for c in chosen:
+        X = cols[c.id].X[rows] * run.w[rows][:, None]
+        left = X - O @ np.linalg.lstsq(O, X, rcond=None)[0]
+        if np.linalg.norm(left) <= rel * max(np.linalg.norm(X), 1e-300):
+            out.append(c)
+    return out
+
+
+def _limits(case, chosen):
+    """(lo, hi) arrays of each chosen cause's model parameters."""
+    return [np.array([q.bounds for q in c.params(case)], float).T for c in chosen]
+
+
+def _clamped(chosen, cols, lims, z) -> list[np.ndarray]:
+    """Each cause's model parameters p = V z, clipped into its physical bounds."""
+    out, k = [], 0
+    for c, (lo, hi) in zip(chosen, lims):
+        V = cols[c.id].V
+        q = V.shape[1]
+        out.append(np.clip(V @ z[k:k + q], lo, hi))
+        k += q
+    return out
+
+
+def _unclamped(chosen, cols, z) -> list[np.ndarray]:
+    out, k = [], 0
+    for c in chosen:
+        V = cols[c.id].V
+        out.append(V @ z[k:k + V.shape[1]])
+        k += V.shape[1]
+    return out
+
+
+def _apply(case, stiffness, chosen, ps):
+    for cause, p in zip(chosen, ps):
+        case, stiffness = cause.apply(case, stiffness, p)
+    return case, stiffness
+
+
+def _solver_bounds(chosen, cols, lims, n_off):
+    """Box on the fit coordinates: finite where a coordinate is one parameter (V column +-e_j)."""
+    lo_z, hi_z = [], []
+    for c, (lo, hi) in zip(chosen, lims):
+        V = cols[c.id].V
+        for j in range(V.shape[1]):
+            nz = np.flatnonzero(np.abs(V[:, j]) > 1e-12)
+            if len(nz) == 1 and abs(abs(V[nz[0], j]) - 1.0) < 1e-12:
+                s = np.sign(V[nz[0], j])
+                a, b = sorted((s * lo[nz[0]], s * hi[nz[0]]))
+                lo_z.append(a)
+                hi_z.append(b)
+            else:
+                lo_z.append(-np.inf)
+                hi_z.append(np.inf)
+    return np.r_[lo_z, np.full(n_off, -np.inf)], np.r_[hi_z, np.full(n_off, np.inf)]
+
+
+def _project(x, chosen, cols, lims, lo, hi, nz):
+    """x with each cause's part moved into its bounds (strictly inside the solver's box)."""
+    ps = _clamped(chosen, cols, lims, x[:nz])
+    z = np.concatenate([cols[c.id].V.T @ p for c, p in zip(chosen, ps)]) if chosen else np.zeros(0)
+    x = np.r_[z, x[nz:]]
+    span = np.where(np.isfinite(hi - lo), hi - lo, 0.0)
+    return np.clip(x, lo + 1e-6 * span, hi - 1e-6 * span)
+
+
+def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int):
+    starts = np.r_[0, np.cumsum([fm.size for fm in run.fmaps])]
+    rows = np.concatenate([np.arange(starts[k], starts[k + 1]) for k in fit_idx])
+    X_off, wf = offset_columns(run.fmaps, run.groups, fit_idx), run.w[rows]
+    nz = sum(cols[c.id].X.shape[1] for c in chosen)
+    J = -np.column_stack([cols[c.id].X[rows] for c in chosen] + [X_off]) * wf[:, None]
+    lims = _limits(run.case, chosen)
+    model_at = lambda x: _apply(run.case, run.stiffness, chosen, _clamped(chosen, cols, lims, x[:nz]))  # noqa: E731
+
+    def features(c, s):
+        sims = run.te_of(c, s, fit_idx)
+        return np.concatenate([run.fmaps[k].apply(run.meas[k] - sim) for k, sim in zip(fit_idx, sims)]), sims
+
+    def fun(x):
+        yy, _ = features(*model_at(x))
+        return (yy - X_off @ x[nz:]) * wf
+
+    y0, sims0 = features(run.case, run.stiffness)
+    lo, hi = _solver_bounds(chosen, cols, lims, X_off.shape[1])
+    x0, *_ = np.linalg.lstsq(-J, y0 * wf, rcond=None)    # linear start: the library's solution
+    x0 = _project(x0, chosen, cols, lims, lo, hi, nz)
+    spans = _refreshed_columns(chosen, cols)
+    if spans:   # a threshold or nonlinear response: start from the best of a coarse scan of its size
+        x0 = min((_project(_scaled(x0, spans, f), chosen, cols, lims, lo, hi, nz) for f in START_SCALES),
+                 key=lambda x: _cost(fun, x))
+    bounded = bool(np.any(np.isfinite(lo) | np.isfinite(hi)))
+    note = ""
+    try:
+        sol = optimize.least_squares(fun, x0, jac=_jacobian(fun, J, spans), x_scale="jac", max_nfev=max_nfev,
+                                     bounds=(lo, hi) if bounded else (-np.inf, np.inf),
+                                     method="trf" if bounded or len(rows) <= len(x0) else "lm")
+        x = sol.x
+    except ValueError as exc:   # a step left the valid geometry (CaseError): keep the linear start
+        x = x0
+        note = (f"fit of {', '.join(c.id for c in chosen)}: a step left the valid geometry "
+                f"({str(exc).splitlines()[0]}); the linear start is kept")
+    ps = _clamped(chosen, cols, lims, x[:nz])
+    sims_after = run.te_of(*_apply(run.case, run.stiffness, chosen, ps))
+    r_x = fun(x)
+    step, *_ = np.linalg.lstsq(_jacobian(fun, J, spans)(x), -r_x, rcond=None)   # Gauss-Newton, unbounded
+    wanted = _unclamped(chosen, cols, (x + step)[:nz])
+    cov, tq = _covariance(r_x, J)
+    sds = [np.sqrt(np.maximum(np.diag(V @ C @ V.T), 0.0)) for V, C in _blocks(chosen, cols, cov)]
+    reasons, effects = _verdicts(run, chosen, ps, wanted, [tq * sd for sd in sds], lims, fit_idx, sims_after)
+    after = remove_offsets([m - s for m, s in zip(run.meas, sims_after)], run.groups)
+    rms_b, rms_a, hold_gain = _gains(run, fit_idx, hold_idx, sims0, sims_after)
+    params = _parameters(run.case, run.stiffness, chosen, cols, ps, cov[:nz, :nz], tq, run.te_model)
+    ext = Extension(tuple(c.id for c in chosen), params, rms_a, rms_b,
+                    float(1.0 - rms_a / rms_b) if rms_b > 0 else 0.0, hold_gain,
+                    tuple(run.records[k].name for k in fit_idx), tuple(run.records[k].name for k in hold_idx),
+                    (), effects, {c.id: {q.name: float(v) for q, v in zip(c.params(run.case), p)}
+                                  for c, p in zip(chosen, ps)})
+    return ext, after, reasons, note
+
+
+def _blocks(chosen, cols, cov):
+    """(V, reduced covariance block) of each chosen cause."""
+    k = 0
+    for c in chosen:
+        V = cols[c.id].V
+        yield V, cov[k:k + V.shape[1], k:k + V.shape[1]]
+        k += V.shape[1]
+
+
+def _verdicts(run: Run, chosen, ps, wanted, half_ci, lims, fit_idx, sims_after) -> tuple[dict, dict]:
+    """({cause: why it cannot be reported, or None}, {cause: effect RMS on the fitted records}).
+    `wanted`: each cause's parameters one unbounded Gauss-Newton step from the fit (where the
+    records pull them); outside the bounds, or a fit sitting on a bound, is unphysical. A 95 %
+    interval wider than the whole physical range: the records do not determine it."""
+    reasons, effects = {}, {}
+    groups = [run.groups[k] for k in fit_idx]
+    fitted = [sims_after[k] for k in fit_idx]
+    for j, (c, p, pw, h, (lo, hi)) in enumerate(zip(chosen, ps, wanted, half_ci, lims)):
+        names = [q.name for q in c.params(run.case)]
+        vague = [f"{n} +- {v:.3g}" for n, v, a, z in zip(names, h, lo, hi) if 2.0 * v > z - a]
+        on = [f"{n} = {w:.4g} (fit {v:.4g}, on or past its bound {b:g})" for n, v, w, a, z in zip(names, p, pw, lo, hi)
+              for b in (a, z) if abs(v - b) <= AT_BOUND * (z - a) or (w - b) * (b - 0.5 * (a + z)) > 0]
+        others = [q if i != j else np.zeros_like(q) for i, q in enumerate(ps)]
+        without = run.te_of(*_apply(run.case, run.stiffness, chosen, others), fit_idx)
+        effect = rms(remove_offsets([a - b for a, b in zip(fitted, without)], groups))
+        effects[c.id], reasons[c.id] = effect, None
+        if vague:
+            reasons[c.id] = (f"the records do not determine it ({'; '.join(vague)} at 95 %: an interval "
+                             f"wider than its physical range)")
+        elif on:
+            reasons[c.id] = (f"the records ask for {'; '.join(on)} (its physical range: "
+                             f"{', '.join(f'{n} in [{a:g}, {z:g}]' for n, a, z in zip(names, lo, hi))})")
+        elif effect < run.noise_arcsec:
+            reasons[c.id] = (f"its effect on the fitted records ({effect:.3g} arcsec RMS, zero offsets "
+                             f"removed) is below their noise floor ({run.noise_arcsec:.3g} arcsec)")
+    return reasons, effects
+
+
+def _cost(fun, x) -> float:
+    """Sum of squares at x; inf where the model refuses the geometry (CaseError, a ValueError)."""
+    try:
+        return float(np.sum(fun(x) ** 2))
+    except ValueError:
+        return float("inf")
+
+
+def _refreshed_columns(chosen, cols) -> list[tuple[int, int, float]]:
+    """(first column, count, step) of each `dc_even` or `nonlinear` cause's Jacobian columns. The
+    library's Jacobian stays fixed for causes near linear at their size; a threshold or strongly
+    nonlinear response's columns are re-taken by the model at every iterate (forward differences
+    of REFRESH_STEP x its unit), so the steps follow the real slope."""
+    spans, k = [], 0
+    for c in chosen:
+        q = cols[c.id].X.shape[1]
+        if c.dc_even or c.nonlinear:
+            spans.append((k, q, REFRESH_STEP * c.unit_size))
+        k += q
+    return spans
+
+
+def _scaled(x0, spans, f):
+    x = x0.copy()
+    for k0, q, _ in spans:
+        x[k0:k0 + q] *= f
+    return x
+
+
+def _jacobian(fun, J, spans):
+    def jac(x):
+        if not spans:
+            return J
+        Jx, r0 = J.copy(), fun(x)
+        for k0, q, h in spans:
+            for j in range(k0, k0 + q):
+                dx = np.zeros_like(x)
+                dx[j] = h
+                Jx[:, j] = (fun(x + dx) - r0) / h
+        return Jx
+    return jac
+
+
+def _gains(run: Run, fit_idx, hold_idx, sims0, sims_after) -> tuple[float, float, float | None]:
+    """(rms before, rms after) on the fitted records, and the hold-out gain (None without)."""
+    meas, groups = run.meas, run.groups
+    fit_groups = [groups[k] for k in fit_idx]
+    rms_b = rms(remove_offsets([meas[k] - s for k, s in zip(fit_idx, sims0)], fit_groups))
+    rms_a = rms(remove_offsets([meas[k] - sims_after[k] for k in fit_idx], fit_groups))
+    if not hold_idx:
+        return rms_b, rms_a, None
+    hg = [groups[k] for k in hold_idx]
+    sims_h0 = run.te_of(run.case, run.stiffness, hold_idx)
+    rb = rms(remove_offsets([meas[k] - s for k, s in zip(hold_idx, sims_h0)], hg))
+    ra = rms(remove_offsets([meas[k] - sims_after[k] for k in hold_idx], hg))
+    return rms_b, rms_a, float(1.0 - ra / rb) if rb > 0 else None
+
+
+def _covariance(r_final, J) -> tuple[np.ndarray, float]:
+    """Linearised parameter covariance (scaled residual variance) and the 95 % t quantile."""
+    dof = max(len(r_final) - J.shape[1], 1)
+    s2 = float(r_final @ r_final) / dof
+    return s2 * np.linalg.pinv(J.T @ J), float(stats.t.ppf(0.975, dof))
+
+
+def _parameters(case, stiffness, chosen, cols, ps, cov_z, tq, te_model) -> dict:
+    """Reported parameters of each chosen cause (its `report`) at its bounded parameters ps."""
+    out = {}
+    for cause, p, (V, C) in zip(chosen, ps, _blocks(chosen, cols, cov_z)):
+        out.update(cause.report(Fitted(p, V @ C @ V.T, tq, case, stiffness, te_model)))
+    return out

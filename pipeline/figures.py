@@ -1,0 +1,223 @@
+"""The engineer's pictures: pure functions of arrays -> one PNG each (matplotlib, off screen).
+
+The stages (cmd_dynamics) and the report (pipeline.report) draw through these, and the image tests
+(tests/test_report.py) draw them from fixed arrays and compare with tests/reference_images/.
+Conventions: catalog axes (torque in % of rated, angle in arcmin), one colour per torque level and
+one panel per load form, characteristic orders labelled in staggered rows so labels never overlap.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.render import figure, save_figure
+
+TORQUE_COLOURS = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02")
+FORM_STYLES = {"constant": "-", "square": "--", "sine": "-."}
+
+
+def _at(x: np.ndarray, y: np.ndarray, x0: float) -> float:
+    """Mean of y at the samples where x == x0 (both branches), else linear interpolation."""
+    hit = np.isclose(x, x0, rtol=0, atol=1e-9 * max(1.0, float(np.max(np.abs(x)))))
+    if hit.any():
+        return float(np.mean(y[hit]))
+    order = np.argsort(x)
+    return float(np.interp(x0, x[order], y[order]))
+
+
+def _polyline(x, y, segments):
+    """The segments k -> k+1 where `segments` is true, one line broken by NaN between runs."""
+    xs, ys, last = [], [], None
+    for k in np.flatnonzero(segments):
+        if last != k - 1:
+            xs += [np.nan, x[k]]
+            ys += [np.nan, y[k]]
+        xs.append(x[k + 1])
+        ys.append(y[k + 1])
+        last = k
+    return np.array(xs), np.array(ys)
+
+
+def hysteresis_loop(path, torque_pct: np.ndarray, angle_arcmin: np.ndarray, *, rigidity_Nm_per_arcmin: float,
+                    lost_motion_arcmin: float, backlash_arcmin: float, rated_Nm: float, title: str) -> None:
+    """The catalog curve: torsion angle against torque in % of rated, input locked, the sweep
+    0 -> +100 -> -100 -> +100 % drawn as rising-torque and falling-torque branches; lost motion
+    (angle between +-3 %) and torsional rigidity b/a (50..100 %) dimensioned; a zoom on +-10 %."""
+    x, y = np.asarray(torque_pct, float), np.asarray(angle_arcmin, float)
+    y = y - 0.5 * (_at(x, y, 3.0) + _at(x, y, -3.0))     # catalog origin: centre of the lost motion
+    fig, (ax, zoom) = figure(1, 2, figsize=(12, 5.2), gridspec_kw={"width_ratios": [3, 2]})
+    rising = np.diff(x) > 0
+    for a in (ax, zoom):
+        for branch, style in ((rising, dict(color="#7fb3e6", lw=3.2)), (~rising, dict(color="#c0392b", lw=1.2, ls="--"))):
+            a.plot(*_polyline(x, y, branch), **style)
+        a.axvspan(-3, 3, color="#f1c40f", alpha=0.25, lw=0)
+        a.axhline(0, color="0.6", lw=0.5)
+        a.axvline(0, color="0.6", lw=0.5)
+        a.grid(True, lw=0.3)
+        a.set_xlabel(f"output torque [% of rated {rated_Nm:g} N m]")
+    ax.plot([], [], color="#7fb3e6", lw=3.2, label="torque rising")
+    ax.plot([], [], color="#c0392b", ls="--", label="torque falling")
+    ax.plot([], [], color="#f1c40f", lw=6, alpha=0.4, label="+-3 % rated (lost-motion band)")
+    # rigidity b/a: the chord 50 -> 100 % of each direction
+    for s in (1, -1):
+        xa, xb = 50.0 * s, 100.0 * s
+        ya, yb = _at(x, y, xa), _at(x, y, xb)
+        ax.plot([xa, xb, xb], [ya, ya, yb], color="k", lw=0.9)
+        ax.annotate(f"b/a = {rigidity_Nm_per_arcmin:.0f} N m/arcmin" if s > 0 else "b/a",
+                    (xb, 0.5 * (ya + yb)), xytext=(-8 if s > 0 else 8, 0), textcoords="offset points",
+                    ha="right" if s > 0 else "left", va="center", fontsize=9)
+    ax.set_ylabel("torsion angle of the output, input locked [arcmin]\n(+ torque and + angle: forward)")
+    ax.set_title(title, fontsize=10)
+    ax.legend(loc="upper left", fontsize=8)
+    ax.set_xlim(-110, 110)
+    lo, hi = _at(x, y, -3.0), _at(x, y, 3.0)
+    zoom.set_xlim(-10, 10)
+    inside = np.abs(x) <= 10.0
+    pad = 0.25 * max(np.ptp(y[inside]), 1e-6)
+    zoom.set_ylim(y[inside].min() - pad, y[inside].max() + pad)
+    zoom.annotate("", xy=(4.5, hi), xytext=(4.5, lo), arrowprops=dict(arrowstyle="<->", lw=1.0))
+    zoom.hlines([lo, hi], 3, 5, colors="k", lw=0.6)
+    zoom.text(5.2, 0.5 * (lo + hi), f"lost motion\n{lost_motion_arcmin:.3f} arcmin\n(catalog: <= 1)",
+              va="center", fontsize=9)
+    zoom.text(-9.5, zoom.get_ylim()[1], f"loop width at zero torque\n(backlash) {backlash_arcmin:.3f} arcmin",
+              va="top", fontsize=8)
+    zoom.set_title("zoom: +-10 % rated", fontsize=10)
+    save_figure(fig, path)
+
+
+def _label_orders(ax, orders: dict[str, float], rows: int = 4) -> None:
+    """Vertical lines at the named orders, short labels ("39x zc") in staggered rows inside the
+    top quarter of a log-y axis, which is first extended to keep that quarter free of data."""
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(lo, hi * (hi / lo) ** (1 / 3))
+    xlo, xhi = ax.get_xlim()
+    shown = sorted((o, n) for n, o in orders.items() if xlo <= o <= xhi)
+    for k, (o, name) in enumerate(shown):
+        tag = name.split()[-1]
+        ax.axvline(o, color="0.35", ls=":", lw=0.7)
+        ax.text(o, 0.97 - 0.065 * (k % rows), tag if tag.endswith("x") else f"{o:.4g}x {tag}",
+                transform=ax.get_xaxis_transform(), ha="center", va="top", fontsize=7.5, color="0.15",
+                bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
+
+
+def te_matrix(path, cells: list[dict], orders: dict[str, float], forms: tuple[str, ...], *,
+              title: str, steady_from_s: float) -> None:
+    """Paper 001's 12 runs: top row TE against output angle (t >= steady_from_s: ramps cut), one
+    panel per load form, one colour per torque; bottom row the order spectra of the same window
+    with the characteristic orders and the load's own order labelled, the tallest line annotated.
+    cells: form, torque_Nm, t_s, output_angle_deg, te_arcsec, optional order/amplitude, load_order."""
+    torques = sorted({c["torque_Nm"] for c in cells})
+    colour = {T: TORQUE_COLOURS[i % len(TORQUE_COLOURS)] for i, T in enumerate(torques)}
+    spectra = any(c.get("order") is not None for c in cells)
+    fig, axes = figure(2 if spectra else 1, len(forms), figsize=(5.2 * len(forms), 9.5 if spectra else 4.6),
+                       squeeze=False)
+    for j, form in enumerate(forms):
+        ax = axes[0, j]
+        sp = axes[1, j] if spectra else None
+        peak = None
+        for c in (c for c in cells if c["form"] == form):
+            t = np.asarray(c["t_s"])
+            keep = t >= steady_from_s
+            if not keep.any():       # a run shorter than the ramps (tests): the whole run, said so
+                keep = np.ones_like(t, bool)
+            out = np.asarray(c["output_angle_deg"])[keep]
+            ax.plot(out, np.asarray(c["te_arcsec"])[keep], color=colour[c["torque_Nm"]], lw=0.8,
+                    ls=FORM_STYLES.get(form, "-"), label=f"{c['torque_Nm']:g} N m")
+            if sp is not None and c.get("order") is not None:
+                o, a = np.asarray(c["order"])[1:], np.asarray(c["amplitude"])[1:]
+                sp.loglog(o, a + 1e-6, color=colour[c["torque_Nm"]], lw=0.7)
+                k = int(np.argmax(a))
+                if peak is None or a[k] > peak[1]:
+                    peak = (o[k], a[k])
+        ax.set_title(f"{form} load", fontsize=10)
+        ax.set_xlabel("output angle [deg]")
+        ax.set_ylabel(f"TE [arcsec] (t >= {steady_from_s:g} s)")
+        ax.grid(True, lw=0.3)
+        ax.legend(fontsize=7, title="T", title_fontsize=7, loc="best")
+        if sp is not None:
+            sp.set_xlim(0.5, max(orders.values()) * 1.5)
+            sp.set_ylim(1e-4, None)
+            load = {"load": c["load_order"] for c in cells
+                    if c["form"] == form and c.get("load_order")}
+            _label_orders(sp, {**orders, **dict(list(load.items())[:1])})
+            if peak is not None:
+                sp.annotate(f"tallest: {peak[0]:.4g}x, {peak[1]:.3g} arcsec", peak, xytext=(-12, -22), ha="right",
+                            textcoords="offset points", fontsize=7, arrowprops=dict(arrowstyle="->", lw=0.6))
+            sp.set_xlabel("order [cycles per output revolution]")
+            sp.set_ylabel("TE amplitude [arcsec]")
+            sp.grid(True, which="both", lw=0.2)
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    save_figure(fig, path)
+
+
+def load_deflection(path, stiffness: dict, *, title: str) -> None:
+    """FE load-deflection curves of stiffness.json: the cycloid tooth-pin contact at each contact
+    position (one curve per pin phase), and the needle and support bearings beside them."""
+    pc = stiffness["pin_contact"]
+    pos, load = np.asarray(pc["position_deg"], float), np.asarray(pc["load_N"], float)
+    appr = np.asarray(pc["approach_m"], float) * 1e6
+    panels = [k for k in ("turning_arm", "support_bearings") if isinstance(stiffness.get(k), dict)
+              and "deflection_m" in stiffness[k]]
+    fig, axes = figure(1, 1 + len(panels), figsize=(6.5 + 4.5 * len(panels), 5), squeeze=False)
+    ax = axes[0, 0]
+    cmap = __import__("matplotlib").colormaps["viridis"]
+    for k, p in enumerate(pos):
+        ax.plot(appr[k], load / 1e3, ".-", ms=3, lw=1.0, color=cmap(k / max(len(pos) - 1, 1)),
+                label=f"{p:g} deg")
+    ax.set_xlabel("normal approach, pin centre to disc [um]")
+    ax.set_ylabel("normal contact force [kN]")
+    ax.set_title("cycloid tooth - pin (2D FE x disc width)\nby pin phase from the line of centres", fontsize=10)
+    ax.grid(True, lw=0.3)
+    ax.legend(fontsize=7, ncol=2, title="position", title_fontsize=7)
+    names = {"turning_arm": "needle (turning-arm) bearing, radial", "support_bearings": "crank support bearing, radial"}
+    for ax, key in zip(axes[0, 1:], panels):
+        d = stiffness[key]
+        ax.plot(np.asarray(d["deflection_m"], float) * 1e6, np.asarray(d["load_N"], float) / 1e3, ".-",
+                color="#1f5fa8")
+        if d.get("operating_load_N"):
+            ax.axhline(d["operating_load_N"] / 1e3, color="#c0392b", ls="--", lw=0.8, label="at rated torque")
+            ax.legend(fontsize=8)
+        ax.set_xlabel("radial deflection [um]")
+        ax.set_ylabel("radial load [kN]")
+        ax.set_title(names[key] + (f"\n{d['designation']}" if d.get("designation") else ""), fontsize=10)
+        ax.grid(True, lw=0.3)
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    save_figure(fig, path)
+
+
+def load_sharing(path, pin_angle_deg: np.ndarray, pin_force_N: np.ndarray, cycle: np.ndarray,
+                 teeth: np.ndarray, max_share: np.ndarray, *, torque_Nm: float, title: str) -> None:
+    """Left: normal force on every pin of each disc at one pose (rated torque). Right: over one
+    mesh cycle (a pin pitch of the eccentric), teeth in contact per disc and the largest pin's
+    share of its disc's load."""
+    fig, (ax, cyc) = figure(1, 2, figsize=(13, 4.8), gridspec_kw={"width_ratios": [3, 2]})
+    n_disc = pin_force_N.shape[0]
+    width = 360.0 / len(pin_angle_deg) / (n_disc + 1)
+    for d in range(n_disc):
+        ax.bar(pin_angle_deg + (d - (n_disc - 1) / 2) * width, pin_force_N[d] / 1e3, width=width,
+               color=TORQUE_COLOURS[d], label=f"disc {d + 1}: {int((pin_force_N[d] > 0).sum())} pins loaded")
+    ax.set_xlim(0, 360)
+    ax.set_xticks(np.arange(0, 361, 45))
+    ax.set_xlabel("pin position on the pin circle [deg]")
+    ax.set_ylabel("pin normal force [kN]")
+    ax.set_title(f"load sharing per pin at {torque_Nm:g} N m", fontsize=10)
+    ax.legend(fontsize=8)
+    ax.grid(True, axis="y", lw=0.3)
+    for d in range(n_disc):     # later discs thinner and dashed: equal counts stay visible
+        cyc.step(cycle, teeth[:, d], where="mid", color=TORQUE_COLOURS[d], lw=3.0 / (d + 1), ls="-" if d == 0 else "--",
+                 label=f"disc {d + 1}: teeth in contact")
+    cyc.set_xlabel("mesh cycle [pin pitches of eccentric rotation]")
+    cyc.set_ylabel("teeth in contact")
+    cyc.yaxis.get_major_locator().set_params(integer=True)
+    share = cyc.twinx()
+    share.plot(cycle, 100 * max_share, color="0.3", ls="--", lw=1.0, label="largest pin share (both discs)")
+    share.set_ylabel("largest pin's share of its disc's load [%]")
+    h1, l1 = cyc.get_legend_handles_labels()
+    h2, l2 = share.get_legend_handles_labels()
+    cyc.legend(h1 + h2, l1 + l2, fontsize=7, loc="lower right")
+    cyc.set_title("over one mesh cycle", fontsize=10)
+    cyc.grid(True, lw=0.3)
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    save_figure(fig, path)
