@@ -46,13 +46,12 @@ disc plane, carrier frame) and `pin_law` (tooth-pin law with the series parts, r
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from geometry.artifacts import InputError, write_json_atomic
+from geometry.artifacts import InputError, read_json, write_json_atomic
 from geometry.fingerprint import Provenance
 
 SCHEMA = "rv-stiffness/3"
@@ -433,14 +432,7 @@ def load(path: str | Path, case=None) -> StiffnessModel:
 
 
 def _read_json(path: Path) -> dict:
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise StiffnessError(f"{path}: not found (run `python -m pipeline fem` first)") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise StiffnessError(f"{path}: not valid JSON ({exc})") from None
-    except OSError as exc:
-        raise StiffnessError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    data = read_json(path, name=str(path), missing_hint="run `python -m pipeline fem` first", error=StiffnessError)
     if not isinstance(data, dict) or data.get("schema") != SCHEMA:
         got = data.get("schema") if isinstance(data, dict) else type(data).__name__
         raise StiffnessError(f"{path}: schema {got!r}, expected {SCHEMA!r}: rebuild it with "

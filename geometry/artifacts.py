@@ -45,3 +45,17 @@ def write_text_atomic(path: str | Path, text: str) -> None:
 
 def write_json_atomic(path: str | Path, data: dict) -> None:
     write_text_atomic(path, json.dumps(data, indent=1, sort_keys=False) + "\n")
+
+
+def read_json(path: str | Path, *, name: str, missing_hint: str, error: type = InputError):
+    """The JSON content of an artifact, or one `error` line naming it (`name`: how the user gave it,
+    e.g. "--diagnosis DIR/diagnosis.json"): missing (with `missing_hint`: the command that makes it),
+    not JSON / not UTF-8, or unreadable (a folder, no permission)."""
+    try:
+        return json.loads(Path(path).read_text())
+    except FileNotFoundError:
+        raise error(f"{name}: not found ({missing_hint})") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise error(f"{name}: not valid JSON ({exc})") from None
+    except OSError as exc:
+        raise error(f"{name}: cannot be read ({exc.strerror or exc})") from None

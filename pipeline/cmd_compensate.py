@@ -14,7 +14,7 @@ import json
 import math
 from pathlib import Path
 
-from geometry.artifacts import InputError
+from geometry.artifacts import InputError, read_json
 
 MAX_POINTS = 16384
 
@@ -41,12 +41,8 @@ def read_model_parameters(path: str | Path, case) -> dict:
     """{cause: {parameter: value}} of a diagnosis.json, refused when made for another case."""
     from geometry.fingerprint import case_fingerprint
     path = Path(path)
-    try:
-        d = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise CompensateError(f"--diagnosis {path}: not found (run `python -m pipeline diagnose` first)") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise CompensateError(f"--diagnosis {path}: not valid JSON ({exc})") from None
+    d = read_json(path, name=f"--diagnosis {path}", missing_hint="run `python -m pipeline diagnose` first",
+                  error=CompensateError)
     ext = d.get("extension") if isinstance(d, dict) else None
     mp = (ext or {}).get("parameters", {}).get("model_parameters") if isinstance(ext, dict) else None
     if not isinstance(mp, dict) or not mp:
