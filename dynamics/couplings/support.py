@@ -63,6 +63,7 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
                 ud[k] = v[idx[k]]
     J = np.eye(n)
     Gs = np.zeros((nc, 2, 2))          # G of each crank (dead band curvature term)
+    mean = np.zeros((nc, 3))           # each crank's plane-mean displacement m and |m|
     cl = p.clearance_m
     if cl > 0.0:
         for j in range(nc):
@@ -71,6 +72,7 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
                 mx += u[2 * (j * nd + d)] / nd
                 my += u[2 * (j * nd + d) + 1] / nd
             r = math.sqrt(mx * mx + my * my)
+            mean[j, 0], mean[j, 1], mean[j, 2] = mx, my, r
             if r <= cl:
                 sx, sy = mx, my
                 S00, S01, S11 = 1.0, 0.0, 1.0
@@ -93,14 +95,11 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     fs = Jt @ g if cl > 0.0 else g
     if cl > 0.0:                       # G terms: d(S h)/dm outside the play
         for j in range(nc):
-            mx, my = 0.0, 0.0
+            mx, my, r = mean[j, 0], mean[j, 1], mean[j, 2]
             hx, hy = 0.0, 0.0
             for d in range(nd):
-                mx += q[dof[j, d, 0]] / nd
-                my += q[dof[j, d, 1]] / nd
                 hx += g[2 * (j * nd + d)]
                 hy += g[2 * (j * nd + d) + 1]
-            r = math.sqrt(mx * mx + my * my)
             if r > cl:
                 ex, ey = mx / r, my / r
                 eh = ex * hx + ey * hy
