@@ -4,7 +4,7 @@
 #   make test                         the test suite (what CI runs)
 #   make bench                        benchmarks -> $(BUILD)/bench.json
 # `all`, `test` and `bench` create .venv and install the pinned dependencies when missing.
-# Stage graph per case:  geometry -> mesh -> fem -> {matrix, hysteresis, fourbar, tolerance, signatures, diagnosis} -> report
+# Stage graph per case:  geometry -> mesh -> fem -> {matrix, hysteresis, fourbar, tolerance, signatures, diagnosis -> compensate} -> report
 
 PYTHON ?= python3
 VENV := .venv
@@ -118,10 +118,17 @@ $(BUILD)/%/signatures/signatures.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json 
 
 # Diagnosis runs where bench records exist for the case: the real RV-160N records (read in place,
 # never copied, and prerequisites: a changed record reruns it); the RV-40E cases have none shipped.
+# HOLDOUT_<case>: records never fitted, the hold-out gain is computed on exactly them (the 800 N.m
+# pair, as issue 13 asks: a torque inside the fitted range). The compensation table is then checked
+# on every record (fitted and held out) beside the published 83-94 % (Bilancia et al. 2025).
 RECORDS_rv160n-81 = $(wildcard $(MEASURED)/rv160n_*.csv)
-stage-diagnosis: $(foreach c,$(CASE_NAMES),$(if $(RECORDS_$(c)),$(BUILD)/$(c)/diagnosis/diagnosis.json))
+HOLDOUT_rv160n-81 = $(wildcard $(MEASURED)/rv160n_*_800Nm_*.csv)
+FITTED = $(filter-out $(HOLDOUT_$*),$(RECORDS_$*))
+stage-diagnosis: $(foreach c,$(CASE_NAMES),$(if $(RECORDS_$(c)),$(BUILD)/$(c)/compensate/compensation.json))
 $(BUILD)/%/diagnosis/diagnosis.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $$(RECORDS_$$*) $(SRC_diagnosis) | $(STAMP)
-	$(RUN) diagnose --case $(CASE_FILE_$*) $(STIFF) --measured $(RECORDS_$*) --out $(BUILD)/$*/diagnosis $(Q)
+	$(RUN) diagnose --case $(CASE_FILE_$*) $(STIFF) --measured $(FITTED) $(if $(HOLDOUT_$*),--holdout $(HOLDOUT_$*)) --out $(BUILD)/$*/diagnosis $(Q)
+$(BUILD)/%/compensate/compensation.json: $(CASE_FP) $(BUILD)/%/diagnosis/diagnosis.json $$(RECORDS_$$*) $(SRC_compensate) | $(STAMP)
+	$(RUN) compensate --case $(CASE_FILE_$*) $(STIFF) --diagnosis $(BUILD)/$*/diagnosis/diagnosis.json --check $(RECORDS_$*) --out $(BUILD)/$*/compensate $(Q)
 
 # Paper 001's no-load bench case (RV-40E, i = 81) as a worked example of the coaxiality diagnosis.
 $(BUILD)/%/diagnosis/paper001.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(SRC_paper001) | $(STAMP)
@@ -131,7 +138,7 @@ STAGES = geometry/profile.csv mesh/crankshaft_mesh.npz fem/stiffness.json matrix
          fourbar/comparison.md tolerance/summary.json signatures/signatures.json
 report: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/report/index.html)
 $(BUILD)/%/report/index.html: $(CASE_FP) $$(addprefix $(BUILD)/%/,$(STAGES)) \
-        $$(if $$(RECORDS_$$*),$(BUILD)/%/diagnosis/diagnosis.json) \
+        $$(if $$(RECORDS_$$*),$(BUILD)/%/diagnosis/diagnosis.json) $$(if $$(RECORDS_$$*),$(BUILD)/%/compensate/compensation.json) \
         $$(if $$(filter rv40e-81,$$*),$(BUILD)/%/diagnosis/paper001.json) $(SRC_report) | $(STAMP)
 	$(RUN) report --case $(CASE_FILE_$*) --build $(BUILD) $(Q)
 

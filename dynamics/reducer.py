@@ -6,7 +6,7 @@ inertias from `dynamics.bodies`. `evaluate` is the Python entry to the assembler
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -36,6 +36,7 @@ class ReducerModel:
     ratio: float
     coaxiality_rad: float    # e / r of the output mounting offset
     coaxiality_phase_rad: float
+    reading_lobes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))   # rows (m, a / r, phase rad)
 
     @property
     def n_dof(self) -> int:
@@ -80,8 +81,12 @@ class ReducerModel:
         return arr[..., off:off + int(np.prod(shape))].reshape(arr.shape[:-1] + shape).copy()
 
     def measured_output_rad(self, carrier_rad):
-        """What an output encoder reads: carrier angle + coaxiality (e/r) sin(theta + phase)."""
-        return carrier_rad + self.coaxiality_rad * np.sin(carrier_rad + self.coaxiality_phase_rad)
+        """What an output encoder reads: carrier angle + coaxiality (e/r) sin(theta + phase)
+        + the reading lobes (a/r) cos(m theta - phase)."""
+        out = carrier_rad + self.coaxiality_rad * np.sin(carrier_rad + self.coaxiality_phase_rad)
+        for m, a, ph in self.reading_lobes:
+            out = out + a * np.cos(m * carrier_rad - ph)
+        return out
 
 
 def build_model(case: ReducerCase, stiffness: StiffnessModel) -> ReducerModel:
@@ -97,7 +102,9 @@ def build_model(case: ReducerCase, stiffness: StiffnessModel) -> ReducerModel:
                         mass=layout.vector(bodies.inertias(case)), scale=layout.scale(ROT_SCALE_M),
                         ratio=case.ratio,
                         coaxiality_rad=er.output_coaxiality_um * 1e-6 / (case.carrier.output_flange_radius_mm * 1e-3),
-                        coaxiality_phase_rad=np.deg2rad(er.output_coaxiality_phase_deg))
+                        coaxiality_phase_rad=np.deg2rad(er.output_coaxiality_phase_deg),
+                        reading_lobes=np.array([(m, a * 1e-3 / case.carrier.output_flange_radius_mm, np.deg2rad(ph))
+                                                for m, a, ph in er.output_reading_lobes], float).reshape(-1, 3))
 
 
 def evaluate(model: ReducerModel, q: np.ndarray, input_rad: float, want_k: bool = False,

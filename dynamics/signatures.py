@@ -106,6 +106,8 @@ def sources(case) -> tuple[Source, ...]:
                lambda c, s: {"main_bearing_runout_um": s}),
         Source("output_coaxiality", "encoder / output mounting runout (reading)", "um", 1.0, "reading",
                lambda c, s: {"output_coaxiality_um": s}),
+        *(Source(f"output_reading_lobes_m{m}", f"encoder / output mounting, {m} lobes (reading)", "um", 1.0,
+                 "reading", lambda c, s, m=m: {"output_reading_lobes": [[m, s, 0.0]]}) for m in (2, 3)),
         Source("turning_arm_clearance", "needle bearing radial clearance", "um", 1.0, "clearance",
                lambda c, s: {"turning_arm_clearance_um": s}),
         Source("support_clearance", "crank support bearing radial clearance", "um", 1.0, "clearance",

@@ -163,7 +163,8 @@ class Errors:
     """As-built error sources (DESIGN.md "An as-built reducer"); zero or empty means ideal. Each
     acts through the contact mechanics of the coupling that reads it (dynamics.couplings.needle:
     crank, hole and main-bearing errors; .pin: pin and disc errors; .support: support clearance),
-    never as an added TE curve; output_coaxiality_um is the one reading error (dynamics.reducer).
+    never as an added TE curve; output_coaxiality_um and output_reading_lobes are the reading errors
+    (dynamics.reducer).
     Per crank: one value (all cranks) or one per crank j (seat at 360 j / n deg on the carrier).
     Per pin: empty or zp values, pin k at 360 k / zp deg. Per disc: one value or one per disc.
     Lobes (rows [m, amplitude, phase_deg]): amplitude cos(m theta - phase) at the pin angle theta;
@@ -210,6 +211,10 @@ class Errors:
     # --- reading error and clearances
     output_coaxiality_um: float = _f(0.0, 1000.0, open_lo=False, default=0.0)   # encoder/mounting runout
     output_coaxiality_phase_deg: float = _f(-360.0, 360.0, default=0.0)
+    # the output encoder's reading error in m >= 2 lobes (its ring or hub deformed by the mounting
+    # screws, graduation error): rows [m, amplitude_um, phase_deg], a tangential amplitude at the
+    # output flange radius r, read as amplitude / r cos(m theta_out - phase) (dynamics.reducer)
+    output_reading_lobes: tuple = _rows(("m", True, 2, None), *_LOBE)
     turning_arm_clearance_um: float = _f(0.0, 200.0, open_lo=False, default=0.0)
     support_clearance_um: float = _f(0.0, 200.0, open_lo=False, default=0.0)
 

@@ -49,6 +49,7 @@ STAGES = {
     "signatures": "pipeline.cmd_signatures:cmd_signatures",
     "diagnosis": "pipeline.cmd_diagnose:run",
     "paper001": "pipeline.cmd_diagnose:run_paper001",
+    "compensate": "pipeline.cmd_compensate:run",
     "report": "pipeline.cmd_report:run",
 }
 # characters Make cannot carry in a file name or variable name

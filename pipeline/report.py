@@ -76,6 +76,13 @@ SECTIONS = (
             "paper 001's no-load bench case as a worked example.", ("diagnosis.json", "paper001.json"),
             missing="no bench records for this case (put records beside the case and run `diagnose`; "
                     "see README, Bringing your own bench data)"),
+    Section("Compensation from the extended model", "compensate",
+            "The diagnosis' extended model (every fitted cause) predicts the TE against output angle per torque "
+            "and direction (compensation.csv, what a controller would subtract); checked on the bench records, "
+            "fitted and held out alike, beside the black-box per-order compensation of Bilancia et al. 2025 "
+            "(83-94 % TE RMS removed online on this bench).", ("compensation.json",),
+            missing="not built: `compensate` runs on a diagnosis (`make all` runs both where the case has "
+                    "bench records)"),
 )
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg")
@@ -126,9 +133,11 @@ CAPTIONS = {
     "residual_time.png": ("Diagnosis residual per record", "measured - simulated against output travel, before "
                           "and after the extension: what the named causes remove (the once-per-revolution swing, the "
                           "torque-dependent offset) and what stays unexplained (the mesh-order ripple)."),
-    "residual_orders.png": ("Diagnosis residual in orders", "the residual's order spectrum per record before and "
-                            "after the extension: a line that drops is explained by a named cause; a line that stays "
-                            "is unexplained by the model."),
+    "residual_orders.png": ("Diagnosis residual in orders", "one panel per torque level: the residual's order "
+                            "spectrum after the extension, forward (blue) and backward (orange), over the spectrum "
+                            "before it (grey); dashed: the records' noise floor. Each significant line is labelled by "
+                            "the reported cause that removed it (black; 'partly' when it fell by more than half), "
+                            "'added by' a cause (purple) when the extension put it there, or 'unexplained' (red)."),
 }
 
 
@@ -241,8 +250,9 @@ def _fmt(v) -> str:
 
 
 def json_to_html(data) -> str:
-    """A JSON artifact as tables: one row per (nested) key with its value; a list of records as a
-    table of its own with one column per field; made_from left out (shown as provenance)."""
+    """A JSON artifact as tables: one row per (nested) key with its value; a list of records, or a
+    mapping of names to flat records, as a table of its own with one column per field; made_from
+    left out (shown as provenance)."""
     if not isinstance(data, dict):
         return f"<p>{E(_fmt(data))}</p>"
     rows, records = [], []
@@ -252,7 +262,11 @@ def json_to_html(data) -> str:
             if k == "made_from":
                 continue
             key = f"{prefix}{k}"
-            if isinstance(v, dict):
+            if isinstance(v, dict) and len(v) > 1 and all(
+                    isinstance(x, dict) and x and not any(isinstance(y, (dict, list)) for y in x.values())
+                    for x in v.values()):
+                records.append((key, [{"": name, **x} for name, x in v.items()]))   # name -> flat record
+            elif isinstance(v, dict):
                 walk(v, key + " / ")
             elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
                 records.append((key, v))

@@ -28,7 +28,8 @@ STIFF = support.stiffness_for_tests(CASE)
 PPR = 256
 CASES = [(c, s) for c in ("output_coaxiality", "torsional_stiffness", "backlash") for s in range(4)] \
     + [("crank_eccentricity_error", s) for s in range(3)] \
-    + [(c, s) for c in ("pin_ring_pattern", "housing_stiffness_pattern", "disc_cumulative_pitch") for s in range(2)]
+    + [(c, s) for c in ("pin_ring_pattern", "housing_stiffness_pattern", "disc_cumulative_pitch",
+                        "output_reading_lobes") for s in range(2)]
 TRUTH_KEY = {"output_coaxiality": "output_coaxiality_um", "torsional_stiffness": "compliance_factor",
              "backlash": "pin_clearance_um", "crank_eccentricity_error": "crank_eccentricity_error_single_um",
              "disc_cumulative_pitch": "disc_cumulative_pitch_um"}

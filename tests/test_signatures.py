@@ -137,6 +137,16 @@ def test_the_reading_error_is_1x_at_every_torque_and_direction(rig):
     assert s.torque_dependence(1) == "independent" and s.direction_dependence(1) == "same"
 
 
+@pytest.mark.parametrize("m", [2, 3])
+def test_a_reading_lobe_is_m_x_of_a_over_r_at_every_torque_and_direction(rig, m):
+    T = (0.1 * rig.case.rated_torque_Nm, rig.case.rated_torque_Nm)
+    s = _sig(rig, f"output_reading_lobes_m{m}", T, (1, -1))
+    a_over_r = 1e-6 / (rig.case.carrier.output_flange_radius_mm * 1e-3)
+    assert s.main_order() == m
+    assert np.allclose(s.amplitude(m), a_over_r * ARCSEC_PER_RAD, rtol=1e-6)     # a / r, read directly
+    assert s.torque_dependence(m) == "independent" and s.direction_dependence(m) == "same"
+
+
 def test_clearances_read_as_lost_motion_and_share_one_signature_a_bench_offset_is_not_a_signature(rig):
     T = (0.1 * rig.case.rated_torque_Nm, rig.case.rated_torque_Nm)
     sigs = [_sig(rig, s, T, (1, -1)) for s in ("pin_radius", "turning_arm_clearance", "crank_timing")]

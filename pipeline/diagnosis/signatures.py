@@ -38,7 +38,7 @@ class SignatureSummary:
     """What a unit parameter does, read from the model (for evidence and the report)."""
     cause: str
     orders: tuple[int, ...]            # dominant orders (>= 10 % of the strongest line)
-    line_arcsec: tuple[float, ...]     # their amplitudes per unit (largest parameter column)
+    line_arcsec: tuple[float, ...]     # their amplitudes per unit (largest over the parameters)
     mean_shift_arcsec: dict            # record name -> mean TE change per unit
     amplitude_by_torque: dict          # |torque| -> strongest line per unit
 
@@ -48,12 +48,13 @@ def summarise(cause_id: str, records, cols: list[np.ndarray], max_order: int,
     amp = None
     shift, by_t = {}, {}
     for rec, c in zip(records, cols):
-        j = int(np.argmax(np.std(c, axis=0))) if c.size else 0
-        sp = spectrum_of(rec.output_angle_deg, c[:, j])
         a = np.zeros(max_order + 1)
-        for k in range(1, max_order + 1):
-            idx = int(np.argmin(np.abs(sp.order - k)))
-            a[k] = max(sp.amplitude[idx], 0.0) if abs(sp.order[idx] - k) < 0.5 else 0.0
+        for j in range(c.shape[1]):   # every parameter: a cause's harmonics sit in different columns
+            sp = spectrum_of(rec.output_angle_deg, c[:, j])
+            for k in range(1, max_order + 1):
+                idx = int(np.argmin(np.abs(sp.order - k)))
+                if abs(sp.order[idx] - k) < 0.5:
+                    a[k] = max(a[k], sp.amplitude[idx])
         amp = a if amp is None else np.maximum(amp, a)
         shift[rec.name] = float(np.mean(c[:, 0]))
         by_t[round(abs(rec.torque_Nm), 1)] = float(a.max())

@@ -22,6 +22,7 @@ _MODULES = (
     "pin_ring_pattern",
     "housing_stiffness_pattern",
     "disc_cumulative_pitch",
+    "output_reading_lobes",
 )
 
 CAUSES: tuple[Cause, ...] = tuple(import_module(f"{__name__}.{m}").CAUSE for m in _MODULES)

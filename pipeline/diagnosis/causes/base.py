@@ -215,34 +215,61 @@ def per_crank(case, key: str, delta: np.ndarray) -> tuple:
     return tuple(float(v) for v in base + delta)
 
 
+class LobeCause(Cause):
+    """A ring pattern of m lobes (c_m, s_m per harmonic m in `harmonics`, each within +-`bound`),
+    added as lobe rows [m, amplitude, phase_deg] to the case's `errors_field` (geometry.params
+    Errors). Each disc's load zone sweeps the ring zc times per output revolution, so m lobes show
+    at m zc x. Subclasses set the attributes and write the evidence."""
+    harmonics: tuple[int, ...] = ()
+    bound: float = 0.0
+    param_prefix: str = ""           # parameter names <prefix>_m<m>_{cos,sin}_<param_unit>
+    param_unit: str = ""
+    report_unit: str = ""            # report keys <id>_m<m>_<report_unit>
+    errors_field: str = ""
+    draw_range: tuple[float, float] = (0.0, 0.0)   # virtual bench: one lobe, |a| in this range
+    dc_even = True   # the mean shift (lost motion) is the same for the pattern turned: even in its size
+
+    def params(self, case):
+        return tuple(Param(f"{self.param_prefix}_m{m}_{part}_{self.param_unit}", self.param_unit,
+                           (-self.bound, self.bound)) for m in self.harmonics for part in ("cos", "sin"))
+
+    def apply(self, case, stiffness, p):
+        rows = [list(r) for r in getattr(case.errors, self.errors_field)] + lobe_rows(self.harmonics, p)
+        return case.with_errors(**{self.errors_field: rows}), stiffness
+
+    def orders(self, case):
+        return tuple(m * case.cycloid.zc for m in self.harmonics)
+
+    def report(self, fit: Fitted) -> dict:
+        """Amplitude and phase per harmonic with delta-method 95 % intervals (polar)."""
+        out: dict = {f"{self.id}_harmonics": [int(m) for m in self.harmonics]}
+        for j, m in enumerate(self.harmonics):
+            sl = slice(2 * j, 2 * j + 2)
+            a, a_ci, ph, ph_ci = polar(fit.p[sl], fit.cov[sl, sl], fit.tq)
+            key = f"{self.id}_m{m}"
+            out.update({f"{key}_{self.report_unit}": a, f"{key}_{self.report_unit}_ci95": a_ci,
+                        f"{key}_phase_deg": ph, f"{key}_phase_deg_ci95": ph_ci})
+        return out
+
+    def lines_text(self, ev: Evidence) -> str:
+        """'78x: <amplitude per torque>; 156x: ...' of the records."""
+        zc = ev.case.cycloid.zc
+        return "; ".join(f"{m * zc}x: {ev.line_by_torque(m * zc)}" for m in self.harmonics)
+
+    def draw(self, rng, case):
+        """One lobe harmonics[j] alone, |a| uniform in draw_range, any phase."""
+        j = int(rng.integers(len(self.harmonics)))
+        m = self.harmonics[j]
+        p = np.zeros(2 * len(self.harmonics))
+        a, ph = rng.uniform(*self.draw_range), rng.uniform(-180.0, 180.0)
+        p[2 * j:2 * j + 2] = a * np.cos(np.radians(ph)), a * np.sin(np.radians(ph))
+        return tuple(float(v) for v in p), {f"{self.id}_harmonic": m, f"{self.id}_m{m}_{self.report_unit}": float(a),
+                                            f"{self.id}_m{m}_phase_deg": float(ph)}
+
+
 def lobe_rows(harmonics, p) -> list[list[float]]:
     """Lobe rows [m, amplitude, phase_deg] (geometry.params.Errors) from p = (c_m, s_m) per
     harmonic m: c cos(m theta) + s sin(m theta) = a cos(m theta - phase)."""
     p = np.asarray(p, float).reshape(len(harmonics), 2)
     return [[int(m), float(np.hypot(c, s)), float(np.degrees(np.arctan2(s, c)))]
             for m, (c, s) in zip(harmonics, p)]
-
-
-def lobe_params(prefix: str, unit: str, harmonics, bound: float) -> tuple[Param, ...]:
-    """(c_m, s_m) per harmonic m, each within +-bound."""
-    return tuple(Param(f"{prefix}_m{m}_{part}_{unit}", unit, (-bound, bound))
-                 for m in harmonics for part in ("cos", "sin"))
-
-
-def lobe_report(prefix: str, unit: str, harmonics, fit: Fitted) -> dict:
-    """Amplitude and phase per harmonic with delta-method 95 % intervals (polar)."""
-    out: dict = {f"{prefix}_harmonics": [int(m) for m in harmonics]}
-    for j, m in enumerate(harmonics):
-        sl = slice(2 * j, 2 * j + 2)
-        a, a_ci, ph, ph_ci = polar(fit.p[sl], fit.cov[sl, sl], fit.tq)
-        out.update({f"{prefix}_m{m}_{unit}": a, f"{prefix}_m{m}_{unit}_ci95": a_ci,
-                    f"{prefix}_m{m}_phase_deg": ph, f"{prefix}_m{m}_phase_deg_ci95": ph_ci})
-    return out
-
-
-def lobe_draw(rng, harmonics, j: int, lo: float, hi: float) -> tuple[np.ndarray, float, float]:
-    """Lobe harmonics[j] alone, |a| uniform in [lo, hi], any phase: (p, a, phase_deg)."""
-    p = np.zeros(2 * len(harmonics))
-    a, ph = rng.uniform(lo, hi), rng.uniform(-180.0, 180.0)
-    p[2 * j:2 * j + 2] = a * np.cos(np.radians(ph)), a * np.sin(np.radians(ph))
-    return p, float(a), float(ph)
