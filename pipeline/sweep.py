@@ -73,8 +73,11 @@ def _run_local(func, tasks, workers, progress) -> list:
 
 def _stop(pool: ProcessPoolExecutor) -> None:
     """Cancel what has not started and terminate the workers (running tasks die mid-way)."""
-    procs = list((getattr(pool, "_processes", None) or {}).values())   # 3.14: pool.terminate_workers()
-    pool.shutdown(wait=False, cancel_futures=True)
+    table = getattr(pool, "_processes", None) or {}   # pid -> process; 3.14: pool.terminate_workers()
+    procs = list(table.values())
+    pool.shutdown(wait=False, cancel_futures=True)    # drops pool._processes, not the manager thread's table
+    # the manager thread may still start a worker it had queued (seen under load): read its table again
+    procs += [p for p in list(table.values()) if p not in procs]
     for p in procs:
         if p.is_alive():
             p.terminate()

@@ -56,13 +56,14 @@ def ci(v: float, sd: float, tq: float) -> list[float]:
 
 
 def polar(p, cp, tq) -> tuple[float, list, float, list]:
-    """Magnitude and angle [deg] of (p0, p1) with linearised (delta-method) 95 % intervals."""
+    """Magnitude and angle [deg] of (p0, p1) with linearised (delta-method) 95 % intervals; the
+    magnitude's interval stops at 0 (an interval reaching 0 says that harmonic is not determined)."""
     m = float(np.hypot(p[0], p[1]))
     g = np.array([p[0], p[1]]) / max(m, 1e-12)                   # d m / d p
     h = np.array([-p[1], p[0]]) / max(m * m, 1e-12)              # d angle / d p
     ang = float(np.degrees(np.arctan2(p[1], p[0])))
-    return (m, ci(m, float(np.sqrt(g @ cp @ g)), tq), ang,
-            ci(ang, float(np.degrees(np.sqrt(h @ cp @ h))), tq))
+    lo, hi = ci(m, float(np.sqrt(g @ cp @ g)), tq)
+    return (m, [max(lo, 0.0), hi], ang, ci(ang, float(np.degrees(np.sqrt(h @ cp @ h))), tq))
 
 
 @dataclass(frozen=True)
