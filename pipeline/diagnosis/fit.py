@@ -70,18 +70,17 @@ _CHI2_1_MEDIAN = float(stats.chi2.median(1))
 
 
 def _wls(y, X):
+    """(coefficients, residual) of the least-squares fit of y on X."""
     if X.shape[1] == 0:
-        return np.zeros(0), float(y @ y)
+        return np.zeros(0), y
     coef, *_ = np.linalg.lstsq(X, y, rcond=None)
-    r = y - X @ coef
-    return coef, float(r @ r)
+    return coef, y - X @ coef
 
 
-def robust_variance(y: np.ndarray, X: np.ndarray) -> float:
-    """Residual variance per feature of the weighted fit of y on X from the median squared residual
-    (module docstring): lines outside the model do not inflate it."""
-    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
-    return float(np.median((y - X @ coef) ** 2)) / _CHI2_1_MEDIAN
+def robust_variance(r: np.ndarray) -> float:
+    """Residual variance per feature from the median squared residual (module docstring): lines
+    outside the model do not inflate it."""
+    return float(np.median(r ** 2)) / _CHI2_1_MEDIAN
 
 
 def match(y: np.ndarray, w: np.ndarray, X_off: np.ndarray, causes: list[CauseColumns],
@@ -91,9 +90,12 @@ def match(y: np.ndarray, w: np.ndarray, X_off: np.ndarray, causes: list[CauseCol
     cols = {c.cause: c.X * w[:, None] for c in causes if c.X.shape[1] > 0 and np.any(c.X)}
     n = len(y)
 
+    def fit_of(names):
+        return _wls(yw, np.column_stack([Ow] + [cols[c] for c in names]) if names else Ow)
+
     def chi2_of(names):
-        X = np.column_stack([Ow] + [cols[c] for c in names]) if names else Ow
-        return _wls(yw, X)
+        coef, r = fit_of(names)
+        return coef, float(r @ r)
 
     _, chi2_off = chi2_of([])
     chosen: list[str] = []
@@ -102,23 +104,25 @@ def match(y: np.ndarray, w: np.ndarray, X_off: np.ndarray, causes: list[CauseCol
         if not out:
             break
         _, chi2_now = chi2_of(chosen)
-        trials = {c: chi2_of(chosen + [c])[1] for c in out}
+        resid = {c: fit_of(chosen + [c])[1] for c in out}
+        trials = {c: float(r @ r) for c, r in resid.items()}
         best = min(trials, key=trials.get)
         q = cols[best].shape[1]
         p_full = Ow.shape[1] + sum(cols[c].shape[1] for c in chosen) + q
         dof = max(n - p_full, 1)
-        s2 = robust_variance(yw, np.column_stack([Ow] + [cols[c] for c in chosen + [best]]))
+        s2 = robust_variance(resid[best])
         F = ((chi2_now - trials[best]) / q) / max(s2, 1e-300)
         p = stats.f.sf(F, q, dof) * len(out)
         if p >= p_enter or (chi2_now - trials[best]) < min_share * chi2_now:
             break
         chosen.append(best)
 
-    coef_all, chi2_fin = chi2_of(chosen)
+    coef_all, r_fin = fit_of(chosen)
+    chi2_fin = float(r_fin @ r_fin)
     p_tot = Ow.shape[1] + sum(cols[c].shape[1] for c in chosen)
     dof = max(n - p_tot, 1)
     Xfull = np.column_stack([Ow] + [cols[c] for c in chosen]) if chosen else Ow
-    s2 = robust_variance(yw, Xfull)    # the entry test's variance: a cause's final p is read alike
+    s2 = robust_variance(r_fin)    # the entry test's variance: a cause's final p is read alike
     cov_all = s2 * np.linalg.pinv(Xfull.T @ Xfull)
     coef, cov, sel = {}, {}, []
     k = Ow.shape[1]

@@ -253,9 +253,8 @@ class LobeCause(Cause):
         return out
 
     def lines_text(self, ev: Evidence) -> str:
-        """'78x: <amplitude per torque>; 156x: ...' of the records."""
-        zc = ev.case.cycloid.zc
-        return "; ".join(f"{m * zc}x: {ev.line_by_torque(m * zc)}" for m in self.harmonics)
+        """'78x: <amplitude per torque>; 156x: ...' of the records at the cause's orders."""
+        return "; ".join(f"{k}x: {ev.line_by_torque(k)}" for k in self.orders(ev.case))
 
     def draw(self, rng, case):
         """One lobe harmonics[j] alone, |a| uniform in draw_range, any phase."""

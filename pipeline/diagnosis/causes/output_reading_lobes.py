@@ -38,8 +38,7 @@ class OutputReadingLobes(LobeCause):
         return self.harmonics
 
     def evidence(self, ev: Evidence) -> str:
-        lines = "; ".join(f"{m}x: {ev.line_by_torque(m)}" for m in self.harmonics)
-        return (f"{ev.prefix}low-order residual lines fixed in output angle ({lines}) as the model's signature "
+        return (f"{ev.prefix}low-order residual lines fixed in output angle ({self.lines_text(ev)}) as the model's signature "
                 f"of the output encoder's reading in m lobes (the same at every torque and in both directions, "
                 f"like the 1x of coaxiality): the encoder ring or hub deformed by its mounting. No part error "
                 f"of the reducer puts a line at these orders in this model; a part of the line that grows "
