@@ -51,6 +51,7 @@ STAGES = {
     "paper001": "pipeline.cmd_diagnose:run_paper001",
     "compensate": "pipeline.cmd_compensate:run",
     "report": "pipeline.cmd_report:run",
+    "sensitivity": "pipeline.cmd_sensitivity:run",
 }
 # characters Make cannot carry in a file name or variable name
 _MAKE_UNSAFE = re.compile(r"[\s$#:%;=\\*?\[\]]")

@@ -36,6 +36,7 @@ class Section:
     intro: str
     tables: tuple = ()     # file names shown as tables (csv, json, md)
     missing: str = "not built yet: `make all CASE=<this case>` builds it"
+    deep: bool = True      # pictures and pages from sub-folders too (False: the folder's own only)
 
 
 SECTIONS = (
@@ -83,6 +84,14 @@ SECTIONS = (
             "(83-94 % TE RMS removed online on this bench).", ("compensation.json",),
             missing="not built: `compensate` runs on a diagnosis (`make all` runs both where the case has "
                     "bench records)"),
+    Section("Sensitivity of the rigidity to the case's sizes", "sensitivity",
+            "Where the predicted rigidity misses its reference, which size would have to be what: each variant is "
+            "the case with one size changed (and the sizes tied to it), run through geometry, mesh, FE and the "
+            "catalog test like the case itself; elasticity d ln K / d ln x and the size that alone would reach "
+            "the reference's band edge. A guide for a teardown, never a correction: nothing here feeds the model.",
+            ("sensitivity.md",),
+            missing="not built: `make sensitivity CASE=<this case>` (about 8 runs of geometry to hysteresis, "
+                    "so not part of `make all`)", deep=False),
 )
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg")
@@ -416,10 +425,11 @@ def build_report(case_dir: str | Path, case_name: str | None = None, case_finger
             parts.append(_budget_table(read_json(folder / "hysteresis.json")))
         if sec.folder == "fourbar":
             parts.append(_windup_note(case_dir))
-        images = derived.get(sec.folder, []) + sorted((p for p in folder.rglob("*") if p.suffix in IMAGE_SUFFIXES),
+        walk = folder.rglob if sec.deep else folder.glob
+        images = derived.get(sec.folder, []) + sorted((p for p in walk("*") if p.suffix in IMAGE_SUFFIXES),
                                                       key=_picture_order)
         parts.extend(_figure(p, case_dir, out_dir) for p in images)
-        for p in sorted(folder.rglob("index.html")):
+        for p in sorted(walk("index.html")):
             parts.append(f"<p><a href='{E(os.path.relpath(p, out_dir))}'>detailed page: "
                          f"{E(p.relative_to(case_dir).as_posix())}</a></p>")
     parts.insert(3, "<nav><ul><li><a href='#summary'>Key figures</a></li>" + "".join(toc) + "</ul></nav>")

@@ -26,7 +26,7 @@ TARGETS = {"geometry": "geometry/profile.csv", "mesh": "mesh/crankshaft_mesh.npz
            "fourbar": "fourbar/comparison.md", "tolerance": "tolerance/summary.json",
            "signatures": "signatures/signatures.json",
            "diagnosis": "diagnosis/diagnosis.json", "paper001": "diagnosis/paper001.json",
-           "report": "report/index.html"}
+           "report": "report/index.html", "sensitivity": "sensitivity/sensitivity.json"}
 
 
 def make(build: Path, *args: str, check: bool = True) -> subprocess.CompletedProcess:
@@ -81,6 +81,9 @@ def test_the_drift_of_issue_10_is_gone_and_the_mesh_ignores_the_solvers(database
     mesh = _rule_prerequisites(db, build, TARGETS["mesh"])
     assert {"fem/shaft.py", "fem/mesh.py", "geometry/solids.py"} <= mesh
     assert "fem/pin_contact.py" not in mesh and "fem/pin_contact.py" in _rule_prerequisites(db, build, TARGETS["fem"])
+    # the sensitivity study runs the stages as subprocesses (no import reaches them): their code too
+    assert {"geometry/solids.py", "fem/carrier.py", "fem/tapered_roller.py", "dynamics/budget.py"} <= \
+        _rule_prerequisites(db, build, TARGETS["sensitivity"])
     # the records a diagnosis reads are prerequisites too (secondary expansion)
     assert "$(RECORDS_$*)" in _rule_prerequisites(db, build, TARGETS["diagnosis"])
 

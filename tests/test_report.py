@@ -191,3 +191,17 @@ def test_the_case_folder_is_one_plain_level_below_the_build_folder(tmp_path):
     for bad in ("..", ".", "", "a/b", "../x", "/abs"):
         with pytest.raises(InputError, match="would leave the build folder"):
             case_folder(tmp_path, bad)
+
+
+def test_the_sensitivity_section_shows_its_table_and_not_the_variants_own_pictures(case_dir):
+    page = build_report(case_dir).read_text()
+    assert "make sensitivity CASE=" in page                  # not built: said how to build it
+    sens = case_dir / "sensitivity"
+    (sens / "variants" / "base" / "hysteresis").mkdir(parents=True)
+    fig, ax = figure()
+    ax.plot([0, 1], [0, 1])
+    save_figure(fig, sens / "variants" / "base" / "hysteresis" / "hysteresis.png")
+    (sens / "sensitivity.md").write_text("# s\n\n| variant | rigidity |\n|---|---|\n| support_span | 154.1 |\n")
+    page = build_report(case_dir).read_text()
+    assert "<td>support_span</td>" in page
+    assert "variants/base" not in page                        # eight runs' pictures stay out of the page
