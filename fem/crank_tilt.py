@@ -15,10 +15,13 @@ of the project's crankshaft (geometry.solids.crankshaft_solid, P2 tetrahedra, fe
       S_ix, S_iy   couple: traction t_x = (z - z_i) / I_i with I_i = int (z - z_i)^2 dA (zero
                    resultant, unit moment); conjugate: the least-squares slope du_x/dz of the
                    surface (what edge-loads the needles).
-    supports: the journals pinned at the bearing centres: the area-mean lateral displacement of
-      each bearing seat (journal length) held, the reaction a uniform traction over the seat, no
-      moment restraint; so bearing and carrier compliances add in series afterwards
-      (`with_elastic_supports`).
+    supports: the journals pinned at the support pair's pressure centres (support_positions_m: a
+      tapered roller bearing's radial reaction acts where its rollers' load lines cross the axis,
+      R_m tan(alpha) from its centre, inside the pair for the RV's face-to-face X arrangement): the
+      area-mean lateral displacement of a band of the seat centred there held, the reaction a
+      uniform traction over it, no moment restraint; so bearing and carrier compliances add in
+      series afterwards (`with_elastic_supports`). The carrier takes the reaction at its seat
+      centre (its condensed DOFs are seat translations): the moment of the few-mm offset is left out.
     C_ij = f_i^T K^-1 f_j (exactly symmetric, work-conjugate); the supports' Lagrange multipliers
       are the journal reactions (statically determinate: checked against statics).
 
@@ -36,10 +39,11 @@ sideways, which the pins turn into output rotation with the lever E zc, like a c
 and f_t = T_d / (n a) along the crank-circle tangent (same on both discs: the bow mode, lever a).
 One lateral spring per crank (the lumped model) sees |2 f_t|^2 C11 and nothing of f_r.
 Limits: linear elastic, no fillets, uniform load along each eccentric (crowning, needle edge load
-ignored), pinned bearing centres.
+ignored), pinned at the pressure centres (the bearings' own tilt is their radial springs there).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -72,8 +76,8 @@ class LoadZone:
 
 @dataclass(frozen=True)
 class Supports:
-    """Bearing seats centred at z = z_m on the journal surface (radius_m), half-width band_m: the
-    seat's mean lateral displacement is held (a pin at the bearing centre, reaction spread over the seat)."""
+    """Support bands centred at z = z_m on the journal surface (radius_m), half-width band_m: the
+    band's mean lateral displacement is held (a pin there, the reaction spread over the band)."""
     z_m: tuple[float, float]
     radius_m: float
     band_m: float
@@ -234,7 +238,7 @@ def fe_flexibility(mesh3: Mesh3D, supports: Supports, zones: tuple[LoadZone, Loa
     asym = float(np.abs(C - C.T).max() / np.abs(C).max())   # Maxwell-Betti: round-off only
     # K u + Cm^T lam = f: the band carries -lam; the shaft pushes +lam into each bearing
     return CrankFlexibility(0.5 * (C + C.T), lam[:4], (zones[0].mid_m, zones[1].mid_m), tuple(supports.z_m),
-                            "3D FE, P2 tetrahedra, journals pinned at the bearing centres",
+                            "3D FE, P2 tetrahedra, journals pinned at the supports",
                             int(n), float(edge_length_m), asym)
 
 
@@ -291,8 +295,34 @@ def stepped_beam_flexibility(span_m: float, zones: tuple[LoadZone, LoadZone], ra
 
 
 # ----------------------------------------------------------------------------- the case's crankshaft
-def case_zones(case) -> tuple[Supports, tuple[LoadZone, LoadZone], float]:
-    """Supports, eccentric zones and span of the case's crankshaft (crank frame, metres)."""
+MIN_BAND_SHARE = 0.25   # smallest reaction band, as a share of the half seat (a steep bearing)
+
+
+def support_positions_m(case, at: str = "pressure") -> tuple[tuple[float, float], float]:
+    """Where the crank is pinned (crank frame, z of J1 and J2) and the half-width of the band the
+    reaction spreads over. at='pressure' (the model): the support pair's pressure centres
+    (fem.tapered_roller, X: R_m tan(alpha) inside each bearing centre, 3.3 mm for the RV-40E's
+    30203), a band centred there and kept on the seat (the seat's inner part: half_seat - offset,
+    at least MIN_BAND_SHARE of the half seat). at='bearing': the bearing centres, the whole seat
+    (the pin of fem.shaft's single-load check)."""
+    from fem.tapered_roller import CRANK_ARRANGEMENT, case_bearing
+    from geometry.solids import crankshaft_layout
+    lay = crankshaft_layout(case)
+    span = lay.support_span_mm * 1e-3
+    half_seat = 0.5 * (lay.journals_mm[0][1] - lay.journals_mm[0][0]) * 1e-3
+    if at == "bearing":
+        return (0.0, span), half_seat
+    if at != "pressure":
+        raise ValueError(f"at = {at!r}: 'pressure' or 'bearing'")
+    off = case_bearing(case).pressure_centre_offset_mm * 1e-3 * (1.0 if CRANK_ARRANGEMENT == "X" else -1.0)
+    band = max(half_seat - abs(off), MIN_BAND_SHARE * half_seat)
+    shift = math.copysign(min(abs(off), half_seat - band), off)
+    return (shift, span - shift), band
+
+
+def case_zones(case, at: str = "pressure") -> tuple[Supports, tuple[LoadZone, LoadZone], float]:
+    """Supports (support_positions_m), eccentric zones and the bearing-centre span of the case's
+    crankshaft (crank frame, metres)."""
     from geometry.solids import crankshaft_layout
     lay = crankshaft_layout(case)
     if len(lay.eccentrics_mm) != 2:
@@ -300,25 +330,26 @@ def case_zones(case) -> tuple[Supports, tuple[LoadZone, LoadZone], float]:
                          f"eccentrics (two discs)")
     zones = tuple(LoadZone(a * 1e-3, b * 1e-3, *(v * 1e-3 for v in lay.eccentric_centre_mm(i)),
                            lay.eccentric_radius_mm * 1e-3) for i, (a, b) in enumerate(lay.eccentrics_mm))
-    span = lay.support_span_mm * 1e-3
-    # the bearings spread their reactions over the seat: band = the journal length
-    half_seat = 0.5 * (lay.journals_mm[0][1] - lay.journals_mm[0][0]) * 1e-3
-    return Supports((0.0, span), lay.journal_radius_mm * 1e-3, half_seat), zones, span
+    z, band = support_positions_m(case, at)
+    return Supports(z, lay.journal_radius_mm * 1e-3, band), zones, lay.support_span_mm * 1e-3
 
 
-def beam_flexibility(case, *, pinned: bool = False) -> CrankFlexibility:
+def beam_flexibility(case, *, pinned: bool = False, at: str = "pressure") -> CrankFlexibility:
     """Stepped-beam reference on the case's layout (journal radius, eccentric radius over the
-    eccentrics), supports spread over the seats as in the FE (pinned: at the bearing centres, as
-    fem.shaft.crankshaft_beam_reference)."""
-    sup, zones, span = case_zones(case)
+    eccentrics), supported where the FE is (`at`, support_positions_m), reactions spread over the
+    same bands (pinned: at points; at='bearing', pinned: fem.shaft.crankshaft_beam_reference)."""
+    sup, zones, _ = case_zones(case, at)
+    z1, z2 = sup.z_m
     rj, re = case.crankshaft.journal_radius_mm * 1e-3, case.crankshaft.eccentric_radius_mm * 1e-3
+    # the beam is supported at 0 and its span: shift the layout by the first support
+    shifted = tuple(dataclasses.replace(zn, z0_m=zn.z0_m - z1, z1_m=zn.z1_m - z1) for zn in zones)
 
     def radius(z):
         r = np.full(np.shape(z), rj)
-        for zn in zones:
+        for zn in shifted:
             r[(z >= zn.z0_m) & (z <= zn.z1_m)] = re
         return r
-    return stepped_beam_flexibility(span, zones, radius, case.material.youngs_modulus_GPa * 1e9,
+    return stepped_beam_flexibility(z2 - z1, shifted, radius, case.material.youngs_modulus_GPa * 1e9,
                                     case.material.poisson_ratio, support_half_width_m=0.0 if pinned else sup.band_m)
 
 
@@ -443,5 +474,6 @@ def case_crank_bending(case, *, mesh3: Mesh3D | None = None, edge_length_m: floa
              "edge_length_m": fe.edge_length_m}
     return {"compliance_m_per_N": C, "journal_force": J, "flex": fe, "check": check,
             "source": ("3D FE (P2 tetrahedra on the mesh stage's crankshaft mesh, scikit-fem), both "
-                       "eccentrics loaded independently, journals pinned at the bearing centres with the "
-                       "reaction spread over each seat (fem.crank_tilt); x and y planes averaged")}
+                       "eccentrics loaded independently, journals pinned at the support bearings' pressure "
+                       "centres (X pair: R_m tan(alpha) inside the bearing centres) with the reaction spread "
+                       "over a band of the seat there (fem.crank_tilt); x and y planes averaged")}

@@ -22,7 +22,7 @@ support_bearings     one crank support bearing (a standard tapered roller bearin
   operating_load_N (per bearing at rated torque), stiffness_N_per_m (tangent there: the model's
   linear spring per bearing, isotropic)
 crank_bending        the shaft alone between its two eccentrics (fem.crank_tilt, 3D FE), pinned at the
-  bearing centres: compliance_m_per_N (2, 2) lateral displacement of eccentric i per N on
+  support bearings' pressure centres: compliance_m_per_N (2, 2) lateral displacement of eccentric i per N on
   eccentric j (mean of x and y), journal_force (2, 2) reaction at journal s (0: J1, end-plate side;
   1: J2, flange side) per N on eccentric i
 carrier              seat flexibility of the carrier (fem.carrier, 3D FE): compliance_m_per_N
@@ -315,7 +315,7 @@ SEAT_OF_JOURNAL = (1, 0)   # journal J1 (end-plate side) -> carrier seat 1, J2 (
 
 def seat_transfer(model: StiffnessModel, n_crank: int) -> np.ndarray:
     """(4 nc, 2 nc nd) seat forces (crank j, seat (flange, end plate), x, y) per eccentric force
-    (crank j, disc plane d, x, y): the crank a beam pinned at its bearing centres (statics)."""
+    (crank j, disc plane d, x, y): the crank a beam pinned at its supports' pressure centres (statics)."""
     P = model.crank_bending.journal_force          # (journal s, eccentric d)
     nd = P.shape[1]
     T = np.zeros((4 * n_crank, 2 * n_crank * nd))
@@ -331,7 +331,7 @@ def support_compliance_parts(model: StiffnessModel, n_crank: int) -> dict:
     """The crank support path as compliances between the eccentric forces and the crank axis
     displacement at each disc plane (crank j, plane d, x, y; carrier frame), one matrix per
     component, summing to the path's compliance (loads reach the carrier through the bearings):
-      crank_bending     shaft alone, pinned at the bearing centres (isotropic: x and y alike);
+      crank_bending     shaft alone, pinned at the supports' pressure centres (isotropic: x and y alike);
       support_bearings  T^T (1/k_b) T, each bearing an isotropic radial spring at its seat;
       carrier           T^T C_car T, the seats' flexibility (racking couples the cranks)."""
     Cb = model.crank_bending.compliance_m_per_N

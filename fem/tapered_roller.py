@@ -48,6 +48,7 @@ from fem import hertz
 from geometry.artifacts import InputError
 
 EXP = 10.0 / 9.0              # line-contact load exponent, Q ~ delta^(10/9)
+CRANK_ARRANGEMENT = "X"       # an RV crank's pair is face-to-face (module doc)
 FILL = 0.85                   # cage fill of the pitch circle (derivation rule, module doc)
 ROLLER_DIAMETER_RULE = 0.25   # D_we / (D - d)
 ROLLER_LENGTH_RULE = 0.8      # l_we / C
@@ -79,6 +80,15 @@ class TaperedRollerBearing:
     def Y(self) -> float:
         """ISO 281 axial factor 0.4 cot(alpha)."""
         return 0.4 / math.tan(self.alpha_rad)
+
+    @property
+    def pressure_centre_offset_mm(self) -> float:   # DERIVED
+        """Distance from the contact mid-plane to the pressure centre, where the rollers' load lines
+        (normal to the cup raceway) cross the axis: (D_pw / 2) tan(alpha), toward the rollers' large
+        ends (lambda_b below / cos a). A radial load acts on the shaft there (the catalogues' load
+        centre 'a'), so a shaft on a pair is pinned at the pressure centres: inside the pair for X
+        (face-to-face), outside for O."""
+        return 0.5 * self.pitch_diameter_mm * math.tan(self.alpha_rad)
 
     @property
     def pitch_diameter_mm(self) -> float:        # DERIVED
@@ -399,15 +409,18 @@ def crank_support_load_N(case, torque_Nm: float) -> dict:
       couple part: each disc also pushes its cranks along the pins' resultant, R = T_d / (z_c e)
       perpendicular to the eccentric (its line of action passes through the pitch point, z_c e
       from the disc centre), T_d = 0.55 T (the more loaded disc); the two discs' R oppose, so they
-      only form a couple, reacted as +-R / n_c * w / span at the supports (w = disc width: the
-      discs' mid-planes one width apart). The couple turns with the crank; `radial_N` is the
+      only form a couple, reacted as +-R / n_c * w / s at the supports (w = disc width: the
+      discs' mid-planes one width apart; s the distance of the pair's pressure centres,
+      fem.crank_tilt.support_positions_m). The couple turns with the crank; `radial_N` is the
       torque part, `couple_N` the amplitude of the rotating part."""
-    cr, cy, k = case.carrier, case.cycloid, case.crankshaft
+    from fem.crank_tilt import support_positions_m
+    cr, cy = case.carrier, case.cycloid
     a = cr.crank_circle_radius_mm * 1e-3
     tangential = torque_Nm / (2 * cr.crank_count * a)
     share = 0.55 if cy.disc_count == 2 else 1.0
     R = share * torque_Nm / (cy.zc * cy.eccentricity_mm * 1e-3)
-    couple = R / cr.crank_count * cy.width_mm / k.support_span_mm if cy.disc_count == 2 else 0.0
+    z1, z2 = support_positions_m(case)[0]
+    couple = R / cr.crank_count * cy.width_mm * 1e-3 / (z2 - z1) if cy.disc_count == 2 else 0.0
     return {"radial_N": tangential, "couple_N": couple, "disc_resultant_N": R,
             "crank_tangential_N": 2 * tangential}
 
@@ -434,9 +447,14 @@ def case_support_setup(case) -> PairSetup:
     """The case's pair: the catalogue size that fits the envelope (select_bearing: the case's journal
     must hold it), contact mid-planes one support span apart, face-to-face (X, module doc), the
     operating preload of the rated torque's bearing load."""
-    b = select_bearing(case.crankshaft.journal_radius_mm, case_envelope(case))
+    b = case_bearing(case)
     pre = operating_preload_N(b, operating_radial_load_N(case, case.rated_torque_Nm))
-    return PairSetup(b, case.crankshaft.support_span_mm * 1e-3, pre, "X")
+    return PairSetup(b, case.crankshaft.support_span_mm * 1e-3, pre, CRANK_ARRANGEMENT)
+
+
+def case_bearing(case) -> TaperedRollerBearing:
+    """The catalogue size the case's journal and envelope hold (select_bearing)."""
+    return select_bearing(case.crankshaft.journal_radius_mm, case_envelope(case))
 
 
 def case_support_bearings(case, max_load_N: float, points: int = 12) -> dict:

@@ -41,7 +41,29 @@ def test_stepped_beam_reference_agrees_with_the_shaft_module_for_the_single_load
     case = load_case(CASES / "rv40e-81.toml")
     from fem.shaft import crankshaft_beam_reference
     k = crankshaft_beam_reference(case)["bending_stiffness_N_per_m"]
-    assert ct.beam_flexibility(case, pinned=True).single_compliance_m_per_N() == pytest.approx(1 / k, rel=1e-3)
+    assert ct.beam_flexibility(case, pinned=True, at="bearing").single_compliance_m_per_N() == pytest.approx(1 / k, rel=1e-3)
+
+
+def test_the_crank_is_pinned_at_the_pressure_centres_of_its_face_to_face_pair():
+    from geometry.params import load_case
+    from fem.tapered_roller import case_support_setup
+    case = load_case(CASES / "rv40e-81.toml")
+    b = case_support_setup(case).bearing
+    # NTN 30203: D_pw = (17 + 40) / 2, e = 0.35 -> tan(alpha) = e / 1.5: the load lines cross the
+    # axis 14.25 x 0.2333 = 3.33 mm from the contact mid-plane, toward the rollers' large ends
+    assert b.pressure_centre_offset_mm == pytest.approx(28.5 / 2 * 0.35 / 1.5, rel=1e-9)
+    (z1, z2), band = ct.support_positions_m(case)
+    off = b.pressure_centre_offset_mm * 1e-3
+    assert (z1, z2) == pytest.approx((off, 0.050 - off), rel=1e-12)       # X: inside the 50 mm pair
+    assert band == pytest.approx(13.25e-3 / 2 - off) and z1 + band == pytest.approx(13.25e-3 / 2)   # on the seat
+    assert ct.support_positions_m(case, "bearing") == ((0.0, 0.050), pytest.approx(13.25e-3 / 2))
+    # the beam reference sees the shorter span: reactions to a couple are +-1 / (z2 - z1)
+    beam = ct.beam_flexibility(case)
+    assert beam.journal_force[2, 4] == pytest.approx(1 / (z2 - z1), rel=1e-3)
+    # shorter span, stiffer shaft: the opposite (tilt) and parallel compliances both fall
+    wide = ct.beam_flexibility(case, at="bearing")
+    for mode in ("opposite", "parallel"):
+        assert getattr(beam, mode)()["deflection_1_m_per_N"] < getattr(wide, mode)()["deflection_1_m_per_N"]
 
 
 def test_elastic_supports_add_each_loads_own_reactions_times_the_bearing_compliance():
@@ -94,9 +116,11 @@ def rv40e():
 @pytest.mark.slow
 def test_rv40e_crankshaft_lies_between_the_stepped_beam_and_the_journal_beam(rv40e):
     case, fe = rv40e
-    sup, zones, span = ct.case_zones(case)
+    sup, zones, _ = ct.case_zones(case)
     stepped = ct.beam_flexibility(case)
-    journal = ct.stepped_beam_flexibility(span, zones, _uniform(sup.radius_m), E, NU, support_half_width_m=sup.band_m)
+    z1, z2 = sup.z_m
+    shifted = tuple(ct.LoadZone(z.z0_m - z1, z.z1_m - z1, z.cx_m, z.cy_m, z.radius_m) for z in zones)
+    journal = ct.stepped_beam_flexibility(z2 - z1, shifted, _uniform(sup.radius_m), E, NU, support_half_width_m=sup.band_m)
     # plane-section beams over-stiffen the short stepped shaft (the eccentric's extra section is not
     # fully effective next to the steps; fem.shaft measured 0.82 in stiffness): the FE lies between
     # the stepped beam (stiff bound) and the journal-radius beam (soft bound) in every mode.
@@ -120,9 +144,9 @@ def test_opposite_loads_tilt_the_eccentrics_and_same_loads_bend_the_shaft_symmet
     # C11 - C12 = 0.106 C11 (measured), and C11 + C12 = 1.89 C11 (not 2 C11) under parallel loads
     assert 0.05 < opp["deflection_1_m_per_N"] / single < 0.2
     assert 1.8 < par["deflection_1_m_per_N"] / single < 2.0
-    # journal reactions obey statics for the couple loads: +-1/span
-    span = case.crankshaft.support_span_mm * 1e-3
-    assert fe.journal_force[2, 4] == pytest.approx(1 / span, rel=0.01)
+    # journal reactions obey statics for the couple loads: +-1 / (distance of the supports)
+    z1, z2 = ct.support_positions_m(case)[0]
+    assert fe.journal_force[2, 4] == pytest.approx(1 / (z2 - z1), rel=0.01)
 
 
 @pytest.mark.slow

@@ -81,9 +81,9 @@ def test_the_crank_blocks_carry_statics_and_the_two_planes_averaged():
     # the eccentrics sit symmetrically about mid-span: C11 = C22, J1 takes eccentric 1's larger share
     assert C[0, 0] == pytest.approx(C[1, 1], rel=1e-9)
     assert np.all(J > 0) and J.sum(axis=0) == pytest.approx([1.0, 1.0])
-    lay_span = case.crankshaft.support_span_mm
-    z1 = lay_span / 2 - case.cycloid.width_mm / 2          # eccentric 1's mid-plane
-    assert J[:, 0] == pytest.approx([1 - z1 / lay_span, z1 / lay_span], rel=1e-6)
+    zm = (case.crankshaft.support_span_mm / 2 - case.cycloid.width_mm / 2) * 1e-3   # eccentric 1's mid-plane
+    (s1, s2), _ = ct.support_positions_m(case)          # pinned at the pressure centres (statics)
+    assert J[:, 0] == pytest.approx([(s2 - zm) / (s2 - s1), (zm - s1) / (s2 - s1)], rel=1e-6)
     # the journal order is the carrier's seat order read through SEAT_OF_JOURNAL: J1 (z = 0, planet
     # side) sits in the end plate (seat 1), J2 in the flange (seat 0)
     assert stiffness.SEAT_OF_JOURNAL == (1, 0)
