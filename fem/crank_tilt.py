@@ -15,9 +15,10 @@ of the project's crankshaft (geometry.solids.crankshaft_solid, P2 tetrahedra, fe
       S_ix, S_iy   couple: traction t_x = (z - z_i) / I_i with I_i = int (z - z_i)^2 dA (zero
                    resultant, unit moment); conjugate: the least-squares slope du_x/dz of the
                    surface (what edge-loads the needles).
-    supports: the journals pinned at the support pair's pressure centres (support_positions_m: a
-      tapered roller bearing's radial reaction acts where its rollers' load lines cross the axis,
-      R_m tan(alpha) from its centre, inside the pair for the RV's face-to-face X arrangement): the
+    supports: the journals pinned at the support pair's pressure centres (fem.tapered_roller.
+      crank_support_positions_m: a tapered roller bearing's radial reaction acts where its rollers'
+      load lines cross the axis, R_m tan(alpha) from its centre, inside the pair for the RV's
+      face-to-face X arrangement): the
       area-mean lateral displacement of a band of the seat centred there held, the reaction a
       uniform traction over it, no moment restraint; so bearing and carrier compliances add in
       series afterwards (`with_elastic_supports`). The carrier takes the reaction at its seat
@@ -51,6 +52,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from fem import elastic, hertz
+from fem.tapered_roller import crank_support_positions_m
 from fem.mesh import Mesh3D
 from fem.shaft import crankshaft_mesh, default_edge_length_m
 from geometry.artifacts import InputError
@@ -295,33 +297,8 @@ def stepped_beam_flexibility(span_m: float, zones: tuple[LoadZone, LoadZone], ra
 
 
 # ----------------------------------------------------------------------------- the case's crankshaft
-MIN_BAND_SHARE = 0.25   # smallest reaction band, as a share of the half seat (a steep bearing)
-
-
-def support_positions_m(case, at: str = "pressure") -> tuple[tuple[float, float], float]:
-    """Where the crank is pinned (crank frame, z of J1 and J2) and the half-width of the band the
-    reaction spreads over. at='pressure' (the model): the support pair's pressure centres
-    (fem.tapered_roller, X: R_m tan(alpha) inside each bearing centre, 3.3 mm for the RV-40E's
-    30203), a band centred there and kept on the seat (the seat's inner part: half_seat - offset,
-    at least MIN_BAND_SHARE of the half seat). at='bearing': the bearing centres, the whole seat
-    (the pin of fem.shaft's single-load check)."""
-    from fem.tapered_roller import CRANK_ARRANGEMENT, case_bearing
-    from geometry.solids import crankshaft_layout
-    lay = crankshaft_layout(case)
-    span = lay.support_span_mm * 1e-3
-    half_seat = 0.5 * (lay.journals_mm[0][1] - lay.journals_mm[0][0]) * 1e-3
-    if at == "bearing":
-        return (0.0, span), half_seat
-    if at != "pressure":
-        raise ValueError(f"at = {at!r}: 'pressure' or 'bearing'")
-    off = case_bearing(case).pressure_centre_offset_mm * 1e-3 * (1.0 if CRANK_ARRANGEMENT == "X" else -1.0)
-    band = max(half_seat - abs(off), MIN_BAND_SHARE * half_seat)
-    shift = math.copysign(min(abs(off), half_seat - band), off)
-    return (shift, span - shift), band
-
-
 def case_zones(case, at: str = "pressure") -> tuple[Supports, tuple[LoadZone, LoadZone], float]:
-    """Supports (support_positions_m), eccentric zones and the bearing-centre span of the case's
+    """Supports (crank_support_positions_m), eccentric zones and the bearing-centre span of the case's
     crankshaft (crank frame, metres)."""
     from geometry.solids import crankshaft_layout
     lay = crankshaft_layout(case)
@@ -330,13 +307,13 @@ def case_zones(case, at: str = "pressure") -> tuple[Supports, tuple[LoadZone, Lo
                          f"eccentrics (two discs)")
     zones = tuple(LoadZone(a * 1e-3, b * 1e-3, *(v * 1e-3 for v in lay.eccentric_centre_mm(i)),
                            lay.eccentric_radius_mm * 1e-3) for i, (a, b) in enumerate(lay.eccentrics_mm))
-    z, band = support_positions_m(case, at)
+    z, band = crank_support_positions_m(case, at)
     return Supports(z, lay.journal_radius_mm * 1e-3, band), zones, lay.support_span_mm * 1e-3
 
 
 def beam_flexibility(case, *, pinned: bool = False, at: str = "pressure") -> CrankFlexibility:
     """Stepped-beam reference on the case's layout (journal radius, eccentric radius over the
-    eccentrics), supported where the FE is (`at`, support_positions_m), reactions spread over the
+    eccentrics), supported where the FE is (`at`, crank_support_positions_m), reactions spread over the
     same bands (pinned: at points; at='bearing', pinned: fem.shaft.crankshaft_beam_reference)."""
     sup, zones, _ = case_zones(case, at)
     z1, z2 = sup.z_m

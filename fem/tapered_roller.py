@@ -411,15 +411,14 @@ def crank_support_load_N(case, torque_Nm: float) -> dict:
       from the disc centre), T_d = 0.55 T (the more loaded disc); the two discs' R oppose, so they
       only form a couple, reacted as +-R / n_c * w / s at the supports (w = disc width: the
       discs' mid-planes one width apart; s the distance of the pair's pressure centres,
-      fem.crank_tilt.support_positions_m). The couple turns with the crank; `radial_N` is the
+      crank_support_positions_m). The couple turns with the crank; `radial_N` is the
       torque part, `couple_N` the amplitude of the rotating part."""
-    from fem.crank_tilt import support_positions_m
     cr, cy = case.carrier, case.cycloid
     a = cr.crank_circle_radius_mm * 1e-3
     tangential = torque_Nm / (2 * cr.crank_count * a)
     share = 0.55 if cy.disc_count == 2 else 1.0
     R = share * torque_Nm / (cy.zc * cy.eccentricity_mm * 1e-3)
-    z1, z2 = support_positions_m(case)[0]
+    z1, z2 = crank_support_positions_m(case)[0]
     couple = R / cr.crank_count * cy.width_mm * 1e-3 / (z2 - z1) if cy.disc_count == 2 else 0.0
     return {"radial_N": tangential, "couple_N": couple, "disc_resultant_N": R,
             "crank_tangential_N": 2 * tangential}
@@ -495,3 +494,27 @@ def case_support_bearings(case, max_load_N: float, points: int = 12) -> dict:
                   "torque_part_N": ld["radial_N"], "couple_part_N": ld["couple_N"],
                   "tangent_at_torque_minus_couple_N_per_m": float(k_span[0]),
                   "tangent_at_torque_plus_couple_N_per_m": float(k_span[1])}}
+
+
+MIN_BAND_SHARE = 0.25   # smallest reaction band, as a share of the half seat (a steep bearing)
+
+
+def crank_support_positions_m(case, at: str = "pressure") -> tuple[tuple[float, float], float]:
+    """Where the crank is pinned (crank frame, z of J1 and J2) and the half-width of the band the
+    reaction spreads over. at='pressure' (the model, fem.crank_tilt): the support pair's pressure
+    centres (X: R_m tan(alpha) inside each bearing centre, 3.3 mm for the RV-40E's 30203), a band
+    centred there and kept on the seat (the seat's inner part: half_seat - offset,
+    at least MIN_BAND_SHARE of the half seat). at='bearing': the bearing centres, the whole seat
+    (the pin of fem.shaft's single-load check)."""
+    from geometry.solids import crankshaft_layout
+    lay = crankshaft_layout(case)
+    span = lay.support_span_mm * 1e-3
+    half_seat = 0.5 * (lay.journals_mm[0][1] - lay.journals_mm[0][0]) * 1e-3
+    if at == "bearing":
+        return (0.0, span), half_seat
+    if at != "pressure":
+        raise ValueError(f"at = {at!r}: 'pressure' or 'bearing'")
+    off = case_bearing(case).pressure_centre_offset_mm * 1e-3 * (1.0 if CRANK_ARRANGEMENT == "X" else -1.0)
+    band = max(half_seat - abs(off), MIN_BAND_SHARE * half_seat)
+    shift = math.copysign(min(abs(off), half_seat - band), off)
+    return (shift, span - shift), band

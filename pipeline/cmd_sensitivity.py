@@ -5,9 +5,9 @@
 
 Every variant (and the unchanged case, `base`) is a folder DIR/variants/<name>/, owned by this
 command, holding its case file and the stages' outputs (geometry, mesh, fem, hysteresis), made by the same commands `make`
-runs. A rerun resumes: a variant whose case text is unchanged and whose hysteresis.json exists is
-read, not recomputed; one whose text changed (another case, another step) is recomputed from
-scratch. Variants run side by side on local processes or a Dask cluster (pipeline.sweep), each
+runs. A rerun resumes: a variant whose case text and stage code (code_fingerprint) are unchanged and
+whose hysteresis.json exists is read, not recomputed; one whose text or code changed is recomputed
+from scratch. Variants run side by side on local processes or a Dask cluster (pipeline.sweep), each
 one process chain; DIR must be on a file system the Dask workers share.
 """
 from __future__ import annotations
@@ -51,14 +51,32 @@ def _stage_commands(case: Path, folder: Path) -> list[list[str]]:
                   "--out", str(folder / "hysteresis"), "--quiet"]]
 
 
-def run_variant(text: str, folder: str) -> dict:
+RUN_STAGES = ("geometry", "mesh", "fem", "hysteresis")
+
+
+def code_fingerprint() -> str:
+    """sha256 over the source files the stage commands run (pipeline.deps import walk; not this
+    command's own, whose table is re-derived on every run): a variant made by other stage code is
+    recomputed, and the report flags a table made by other stage code."""
+    import hashlib
+    from pipeline import deps
+    from geometry.fingerprint import file_fingerprint
+    files = sorted(set().union(*(deps.stage_files(s) for s in RUN_STAGES)))
+    h = hashlib.sha256()
+    for f in files:
+        h.update(f"{f}:{file_fingerprint(deps.ROOT / f)}\n".encode())
+    return h.hexdigest()
+
+
+def run_variant(text: str, folder: str, code: str = "") -> dict:
     """One variant through geometry -> mesh -> fem -> hysteresis in `folder` (resumed when its case
-    text is unchanged); its figures, or {'error': the failing stage's last line}."""
+    text and the stages' code are unchanged); its figures, or {'error': the failing stage's last line}."""
     folder = Path(folder)
-    case = folder / "case.toml"
+    case, stamp = folder / "case.toml", folder / "code.txt"
     result = folder / "hysteresis" / "hysteresis.json"
-    if not (case.exists() and case.read_text() == text and result.exists()):
-        shutil.rmtree(folder, ignore_errors=True)   # another case text: nothing of the old one is kept
+    if not (case.exists() and case.read_text() == text and stamp.exists() and stamp.read_text() == code
+            and result.exists()):
+        shutil.rmtree(folder, ignore_errors=True)   # another case text or code: nothing old is kept
         folder.mkdir(parents=True, exist_ok=True)
         write_text_atomic(case, text)
         # one BLAS thread per stage process, as `make` exports: runs go side by side on the cores
@@ -68,6 +86,7 @@ def run_variant(text: str, folder: str) -> dict:
             if r.returncode:
                 last = (r.stderr.strip().splitlines() or [f"exit {r.returncode}"])[-1]
                 return {"error": f"{cmd[3]}: {last}"}
+        write_text_atomic(stamp, code)               # last: an interrupted variant is redone
     h = json.loads(result.read_text())
     stiff = json.loads((folder / "fem" / "stiffness.json").read_text())
     return {"rigidity": h["torsional_rigidity_Nm_per_arcmin"], "lost_motion": h["lost_motion_arcmin"],
@@ -101,12 +120,13 @@ def run(args) -> int:
     case = load_case(args.case)
     text = Path(args.case).read_text(encoding="utf-8-sig")
     out = Path(args.out)
-    tasks, meta = [(renamed(text, f"{case.name}-base"), str(out / "variants" / "base"))], {}
+    code = code_fingerprint()
+    tasks, meta = [(renamed(text, f"{case.name}-base"), str(out / "variants" / "base"), code)], {}
     for v in variants:
         vtext, edits = edited(text, v, f"{case.name}-{v.name}")
         s = v.size
         meta[v.name] = {"edits": edits, "assumed": is_assumed(case_value(text, s.section, s.key)[1])}
-        tasks.append((vtext, str(out / "variants" / v.name)))
+        tasks.append((vtext, str(out / "variants" / v.name), code))
 
     def progress(done, total):
         if not args.quiet:
@@ -120,7 +140,8 @@ def run(args) -> int:
     table = summarise(base, runs, case.operation.reference_rigidity_Nm_per_arcmin, args.band)
     table.update(case=case.name, case_source=str(args.case),
                  base_bearing=base.get("bearing"),
-                 noise="the crankshaft tet mesh is remade per run (fTetWild): ~0.1 % on the rigidity",
+                 noise="the crankshaft tet mesh is remade per run (fTetWild): up to ~0.5 % on the rigidity",
+                 code_fingerprint=code,
                  made_from=made_from(case, "rv-sensitivity/1").to_json())
     write_json_atomic(out / "sensitivity.json", table)
     md = markdown(table, case.name)

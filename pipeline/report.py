@@ -341,6 +341,20 @@ def _stale_note(path: Path, case_fingerprint: str | None) -> str:
             f"{short(case_fingerprint)}): rebuild it (make)</p>")
 
 
+def _sensitivity_code_note(path: Path) -> str:
+    """The sensitivity table is not a `make all` prerequisite (about 8 pipeline runs): say so when
+    the stages' code has changed since it was made."""
+    from pipeline.cmd_sensitivity import code_fingerprint
+    try:
+        made = json.loads(path.read_text()).get("code_fingerprint")
+    except (ValueError, AttributeError, OSError):
+        return ""
+    if made == code_fingerprint():
+        return ""
+    return ("<p class='missing'>this table was made by other code than the stages have now: rerun "
+            "<code>make sensitivity CASE=&lt;this case&gt;</code></p>")
+
+
 def _figure(path: Path, case_dir: Path, out_dir: Path) -> str:
     rel = os.path.relpath(path, out_dir)
     where = path.relative_to(case_dir).as_posix()
@@ -425,6 +439,8 @@ def build_report(case_dir: str | Path, case_name: str | None = None, case_finger
             parts.append(_budget_table(read_json(folder / "hysteresis.json")))
         if sec.folder == "fourbar":
             parts.append(_windup_note(case_dir))
+        if sec.folder == "sensitivity":
+            parts.append(_sensitivity_code_note(folder / "sensitivity.json"))
         walk = folder.rglob if sec.deep else folder.glob
         images = derived.get(sec.folder, []) + sorted((p for p in walk("*") if p.suffix in IMAGE_SUFFIXES),
                                                       key=_picture_order)

@@ -139,13 +139,14 @@ def test_an_eccentric_error_of_one_disc_shows_at_the_crankshaft_order_and_both_e
     # Errors.eccentric_error_um moves disc 1's eccentric only: disc 1 turns against disc 2 once per
     # crank revolution -> a zp x (40x) TE line, linear in the error. crank_eccentricity_um moves both
     # eccentrics of the crank (180 deg apart): the discs turn +d and -d and the zp x line cancels.
-    # Measured (RV-40E stand-in stiffness, 256 points per output rev): 0.846 arcsec per um at 30 %
-    # rated for 1, 5, 10 um (4.23, 8.35 arcsec; within 1.5 % of linear), the same at 60 % rated and
-    # 0.85-0.96 per um at 3 % rated; both-eccentrics 5 um: 40x 0.002 arcsec with one lateral spring
+    # Measured (RV-40E stand-in stiffness, 256 points per output rev): 0.728 arcsec per um at 30 %
+    # rated with the crank pinned at its bearings' pressure centres (0.846 when pinned at the bearing
+    # centres, a softer support path: the same offset then turned the disc more); before that, 1, 5, 10 um gave 4.23, 8.35 arcsec (within 1.5 % of linear), the same at 60 %
+    # rated and 0.85-0.96 per um at 3 % rated; both-eccentrics 5 um: 40x 0.002 arcsec with one lateral spring
     # per crank; with the crank axis per disc plane the two discs' supports differ (end plate vs
     # clamped flange side, disc load shares ~45/55) and the cancellation is partial: measured 0.90 arcsec
     # against 3.76 for one eccentric (24 %).
-    # Tolerances: 0.75-0.95 arcsec per um; linearity 5 %; cancellation < 35 % of the one-disc line.
+    # Tolerances: 0.65-0.85 arcsec per um; linearity 5 %; cancellation < 35 % of the one-disc line.
     from pipeline.diagnosis.orders import spectrum_of
     base = model_for_tests("rv40e-81")
     case = base.case
@@ -158,7 +159,7 @@ def test_an_eccentric_error_of_one_disc_shows_at_the_crankshaft_order_and_both_e
         return spectrum_of(ang / case.ratio, te - te0).at(zp)
 
     l1, l5 = line(eccentric_error_um=[1.0, 0.0, 0.0]), line(eccentric_error_um=[5.0, 0.0, 0.0])
-    assert 0.75 < l1 < 0.95
+    assert 0.65 < l1 < 0.85
     assert l5 == pytest.approx(5.0 * l1, rel=0.05)
     assert line(crank_eccentricity_um=[5.0, 0.0, 0.0]) < 0.35 * l5
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from fem import crank_tilt as ct
+from fem.tapered_roller import crank_support_positions_m
 from fem import hertz
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
@@ -52,11 +53,11 @@ def test_the_crank_is_pinned_at_the_pressure_centres_of_its_face_to_face_pair():
     # NTN 30203: D_pw = (17 + 40) / 2, e = 0.35 -> tan(alpha) = e / 1.5: the load lines cross the
     # axis 14.25 x 0.2333 = 3.33 mm from the contact mid-plane, toward the rollers' large ends
     assert b.pressure_centre_offset_mm == pytest.approx(28.5 / 2 * 0.35 / 1.5, rel=1e-9)
-    (z1, z2), band = ct.support_positions_m(case)
+    (z1, z2), band = crank_support_positions_m(case)
     off = b.pressure_centre_offset_mm * 1e-3
     assert (z1, z2) == pytest.approx((off, 0.050 - off), rel=1e-12)       # X: inside the 50 mm pair
     assert band == pytest.approx(13.25e-3 / 2 - off) and z1 + band == pytest.approx(13.25e-3 / 2)   # on the seat
-    assert ct.support_positions_m(case, "bearing") == ((0.0, 0.050), pytest.approx(13.25e-3 / 2))
+    assert crank_support_positions_m(case, "bearing") == ((0.0, 0.050), pytest.approx(13.25e-3 / 2))
     # the beam reference sees the shorter span: reactions to a couple are +-1 / (z2 - z1)
     beam = ct.beam_flexibility(case)
     assert beam.journal_force[2, 4] == pytest.approx(1 / (z2 - z1), rel=1e-3)
@@ -145,7 +146,7 @@ def test_opposite_loads_tilt_the_eccentrics_and_same_loads_bend_the_shaft_symmet
     assert 0.05 < opp["deflection_1_m_per_N"] / single < 0.2
     assert 1.8 < par["deflection_1_m_per_N"] / single < 2.0
     # journal reactions obey statics for the couple loads: +-1 / (distance of the supports)
-    z1, z2 = ct.support_positions_m(case)[0]
+    z1, z2 = crank_support_positions_m(case)[0]
     assert fe.journal_force[2, 4] == pytest.approx(1 / (z2 - z1), rel=0.01)
 
 

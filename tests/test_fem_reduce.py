@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from fem import crank_tilt as ct
+from fem.tapered_roller import crank_support_positions_m
 from fem import stiffness
 from fem import tapered_roller as tr
 from fem.reduce import LOAD_MARGIN, needle_force_classical_N, table_loads_N
@@ -82,7 +83,7 @@ def test_the_crank_blocks_carry_statics_and_the_two_planes_averaged():
     assert C[0, 0] == pytest.approx(C[1, 1], rel=1e-9)
     assert np.all(J > 0) and J.sum(axis=0) == pytest.approx([1.0, 1.0])
     zm = (case.crankshaft.support_span_mm / 2 - case.cycloid.width_mm / 2) * 1e-3   # eccentric 1's mid-plane
-    (s1, s2), _ = ct.support_positions_m(case)          # pinned at the pressure centres (statics)
+    (s1, s2), _ = crank_support_positions_m(case)          # pinned at the pressure centres (statics)
     assert J[:, 0] == pytest.approx([(s2 - zm) / (s2 - s1), (zm - s1) / (s2 - s1)], rel=1e-6)
     # the journal order is the carrier's seat order read through SEAT_OF_JOURNAL: J1 (z = 0, planet
     # side) sits in the end plate (seat 1), J2 in the flange (seat 0)

@@ -118,6 +118,18 @@ def test_the_command_runs_each_variant_resumes_and_reports_a_failed_one(tmp_path
     assert runs.read_text() == "x"
     assert main(argv) == 0                             # resumed: the unchanged variant is read
     assert runs.read_text() == "x"
+    assert t["code_fingerprint"] == cmd_sensitivity.code_fingerprint()
+    # other stage code (a stiffness model changed since): recomputed, not read from the old run
+    real = cmd_sensitivity.code_fingerprint
+    cmd_sensitivity.code_fingerprint = lambda: "other code"
+    try:
+        assert main(argv) == 0
+    finally:
+        cmd_sensitivity.code_fingerprint = real
+    assert runs.read_text() == "x"                     # a fresh folder (the old count is gone), run once
+    assert (out / "variants" / "pillar_radius" / "code.txt").read_text() == "other code"
+    assert main(argv) == 0                             # and back: recomputed again
+    assert (out / "variants" / "pillar_radius" / "code.txt").read_text() == real()
     # another case text in the same folder is recomputed from scratch, not mixed with the old
     other = tmp_path / "other.toml"
     other.write_text(TEXT.replace("pillar_radius_mm = 6.0 ", "pillar_radius_mm = 7.0 "))
