@@ -18,11 +18,11 @@ of the project's crankshaft (geometry.solids.crankshaft_solid, P2 tetrahedra, fe
     supports: the journals pinned at the support pair's pressure centres (fem.tapered_roller.
       crank_support_positions_m: a tapered roller bearing's radial reaction acts where its rollers'
       load lines cross the axis, R_m tan(alpha) from its centre, inside the pair for the RV's
-      face-to-face X arrangement): the
-      area-mean lateral displacement of a band of the seat centred there held, the reaction a
-      uniform traction over it, no moment restraint; so bearing and carrier compliances add in
-      series afterwards (`with_elastic_supports`). The carrier takes the reaction at its seat
-      centre (its condensed DOFs are seat translations): the moment of the few-mm offset is left out.
+      face-to-face X arrangement): the area-mean lateral displacement of a band of the seat
+      centred there held, the reaction a uniform traction over it, no moment restraint; so bearing
+      and carrier compliances add in series afterwards (`with_elastic_supports`). The carrier takes
+      the reaction at its seat centre (its condensed DOFs are seat translations): the moment of the
+      few-mm offset is left out.
     C_ij = f_i^T K^-1 f_j (exactly symmetric, work-conjugate); the supports' Lagrange multipliers
       are the journal reactions (statically determinate: checked against statics).
 
@@ -52,9 +52,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from fem import elastic, hertz
-from fem.tapered_roller import crank_support_positions_m
 from fem.mesh import Mesh3D
 from fem.shaft import crankshaft_mesh, default_edge_length_m
+from fem.tapered_roller import crank_support_positions_m
 from geometry.artifacts import InputError
 
 ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi

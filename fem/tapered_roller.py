@@ -49,6 +49,7 @@ from geometry.artifacts import InputError
 
 EXP = 10.0 / 9.0              # line-contact load exponent, Q ~ delta^(10/9)
 CRANK_ARRANGEMENT = "X"       # an RV crank's pair is face-to-face (module doc)
+MIN_BAND_SHARE = 0.25         # smallest crank reaction band, share of the half seat (a steep bearing)
 FILL = 0.85                   # cage fill of the pitch circle (derivation rule, module doc)
 ROLLER_DIAMETER_RULE = 0.25   # D_we / (D - d)
 ROLLER_LENGTH_RULE = 0.8      # l_we / C
@@ -494,9 +495,6 @@ def case_support_bearings(case, max_load_N: float, points: int = 12) -> dict:
                   "torque_part_N": ld["radial_N"], "couple_part_N": ld["couple_N"],
                   "tangent_at_torque_minus_couple_N_per_m": float(k_span[0]),
                   "tangent_at_torque_plus_couple_N_per_m": float(k_span[1])}}
-
-
-MIN_BAND_SHARE = 0.25   # smallest reaction band, as a share of the half seat (a steep bearing)
 
 
 def crank_support_positions_m(case, at: str = "pressure") -> tuple[tuple[float, float], float]:

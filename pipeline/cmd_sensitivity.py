@@ -4,8 +4,8 @@
                                  [--workers N | --scheduler ADDRESS]
 
 Every variant (and the unchanged case, `base`) is a folder DIR/variants/<name>/, owned by this
-command, holding its case file and the stages' outputs (geometry, mesh, fem, hysteresis), made by the same commands `make`
-runs. A rerun resumes: a variant whose case text and stage code (code_fingerprint) are unchanged and
+command, holding its case file and the stages' outputs (geometry, mesh, fem, hysteresis), made by
+the same commands `make` runs. A rerun resumes: a variant whose case text and stage code (code_fingerprint) are unchanged and
 whose hysteresis.json exists is read, not recomputed; one whose text or code changed is recomputed
 from scratch. Variants run side by side on local processes or a Dask cluster (pipeline.sweep), each
 one process chain; DIR must be on a file system the Dask workers share.
@@ -19,11 +19,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-from geometry.artifacts import InputError, write_json_atomic, write_text_atomic
+from geometry.artifacts import write_json_atomic, write_text_atomic
+from pipeline.sensitivity import SensitivityError
 
-
-class SensitivityRunError(InputError):
-    """A bad --only / --band, or a case file that cannot be read."""
+RUN_STAGES = ("geometry", "mesh", "fem", "hysteresis")   # _stage_commands' order (a test holds it)
 
 
 def register(sub) -> None:
@@ -49,9 +48,6 @@ def _stage_commands(case: Path, folder: Path) -> list[list[str]]:
                   "--quiet"],
             py + ["hysteresis", "--case", str(case), "--stiffness", str(folder / "fem" / "stiffness.json"),
                   "--out", str(folder / "hysteresis"), "--quiet"]]
-
-
-RUN_STAGES = ("geometry", "mesh", "fem", "hysteresis")
 
 
 def code_fingerprint() -> str:
@@ -101,7 +97,7 @@ def _selected(only: str | None):
     names = [n.strip() for n in only.split(",") if n.strip()]
     bad = [n for n in names if n not in BY_NAME]
     if bad or not names:
-        raise SensitivityRunError(f"--only {only!r}: allowed comma-separated variants among "
+        raise SensitivityError(f"--only {only!r}: allowed comma-separated variants among "
                                   f"{', '.join(BY_NAME)}")
     return [BY_NAME[n] for n in names]
 
@@ -135,7 +131,7 @@ def run(args) -> int:
                         progress=progress)
     base = results[0]
     if "error" in base:
-        raise SensitivityRunError(f"--case {args.case}: the unchanged case failed ({base['error']})")
+        raise SensitivityError(f"--case {args.case}: the unchanged case failed ({base['error']})")
     runs = {v.name: {**meta[v.name], **r} for v, r in zip(variants, results[1:])}
     table = summarise(base, runs, case.operation.reference_rigidity_Nm_per_arcmin, args.band)
     table.update(case=case.name, case_source=str(args.case),

@@ -12,19 +12,21 @@ with the unchanged case run the same way. Per variant:
 
 a local, first-order reading: x_t far from x0 is outside the range where one power law holds and
 is reported as such. Nothing here feeds the model; it says what a teardown would have to find.
-The crankshaft tet mesh is remade per variant (fTetWild is not run-to-run reproducible: up to ~0.5 % on
-the rigidity between remeshes, stated as the noise floor of a variant's change).
+The crankshaft tet mesh is remade per variant (fTetWild is not run-to-run reproducible: up to
+~0.5 % on the rigidity between remeshes, stated as the noise floor of a variant's change).
 """
 from __future__ import annotations
 
 import math
 import re
 from dataclasses import dataclass
+
 from geometry.artifacts import InputError
 
 
 class SensitivityError(InputError):
-    """A variant that names no size of the case, or an edit the case file cannot take."""
+    """A variant that names no size of the case, an edit the case file cannot take, a bad --only
+    or --band, or an unchanged case that fails to run."""
 
 
 @dataclass(frozen=True)
@@ -94,26 +96,29 @@ def _format(value: float, integer: bool) -> str:
     return str(int(round(value))) if integer else repr(round(float(value), 9))
 
 
-def case_value(text: str, section: str, key: str) -> tuple[float, str, bool]:
-    """(value, its line's comment, integer?) of `key` in `[section]` of a case file's text."""
-    line = _find(text, section, key)[1]
-    m = re.match(_VALUE.format(key=re.escape(key)), line)
-    raw = m.group(2)
-    return float(raw), m.group(3), not any(c in raw for c in ".eE")
-
-
-def _find(text: str, section: str, key: str) -> tuple[int, str]:
-    lines = text.splitlines()
-    here = None
+def _locate(lines: list[str], section: str, key: str) -> tuple[int, re.Match]:
+    """Index and value match of the numeric `key` line in `[section]` (one scan of the text)."""
+    here, pattern = None, re.compile(_VALUE.format(key=re.escape(key)))
     for i, line in enumerate(lines):
         m = _SECTION.match(line)
         if m:
             here = m.group(1)
             continue
-        if here == section and re.match(_VALUE.format(key=re.escape(key)), line):
-            return i, line
+        m = pattern.match(line) if here == section else None
+        if m:
+            return i, m
     raise SensitivityError(f"case file: no numeric `{key}` in [{section}]; a sensitivity variant "
                            f"changes a size the case file states")
+
+
+def _parsed(m: re.Match) -> tuple[float, str, bool]:
+    raw = m.group(2)
+    return float(raw), m.group(3), not any(c in raw for c in ".eE")
+
+
+def case_value(text: str, section: str, key: str) -> tuple[float, str, bool]:
+    """(value, its line's comment, integer?) of `key` in `[section]` of a case file's text."""
+    return _parsed(_locate(text.splitlines(), section, key)[1])
 
 
 def edited(text: str, variant: Variant, name: str) -> tuple[str, list[dict]]:
@@ -121,8 +126,8 @@ def edited(text: str, variant: Variant, name: str) -> tuple[str, list[dict]]:
     lines = text.splitlines()
     done, first_delta = [], None
     for e in variant.edits:
-        i, line = _find("\n".join(lines), e.section, e.key)
-        x0, _, integer = case_value("\n".join(lines), e.section, e.key)
+        i, m = _locate(lines, e.section, e.key)
+        x0, _, integer = _parsed(m)
         if e.kind == "follow":
             if first_delta is None:
                 raise SensitivityError(f"variant {variant.name}: a tied edit needs a first edit")
@@ -131,7 +136,6 @@ def edited(text: str, variant: Variant, name: str) -> tuple[str, list[dict]]:
             x1 = e.apply(x0)
         if first_delta is None:
             first_delta = x1 - x0
-        m = re.match(_VALUE.format(key=re.escape(e.key)), line)
         lines[i] = f"{m.group(1)}{_format(x1, integer)}{m.group(3)}  # sensitivity {variant.name}: was {m.group(2)}"
         done.append({"section": e.section, "key": e.key, "from": x0, "to": float(_format(x1, integer))})
     return renamed("\n".join(lines) + "\n", name), done
@@ -228,7 +232,7 @@ def markdown(table: dict, case_name: str) -> str:
                 return f"not alone (beyond {LOCAL_RANGE:g} x)"
             return f"{v:.3g} ({f:.2f} x)"
         e = "-" if r["elasticity"] is None else f"{r['elasticity']:+.2f}"
-        tied = "".join(f" with {e['key']}" for e in r["edits"][1:])
+        tied = "".join(f" with {ed['key']}" for ed in r["edits"][1:])
         out.append(f"| {name} | {r['size']}{tied} ({'ASSUMED' if r['assumed'] else 'sourced'}) | "
                    f"{s['from']:g} -> {s['to']:g} | {r['rigidity_Nm_per_arcmin']:.1f} | "
                    f"{100 * r['rigidity_change']:+.1f} % | {r['lost_motion_arcmin']:.3f} | {e} | "

@@ -141,8 +141,9 @@ def test_an_eccentric_error_of_one_disc_shows_at_the_crankshaft_order_and_both_e
     # eccentrics of the crank (180 deg apart): the discs turn +d and -d and the zp x line cancels.
     # Measured (RV-40E stand-in stiffness, 256 points per output rev): 0.728 arcsec per um at 30 %
     # rated with the crank pinned at its bearings' pressure centres (0.846 when pinned at the bearing
-    # centres, a softer support path: the same offset then turned the disc more); before that, 1, 5, 10 um gave 4.23, 8.35 arcsec (within 1.5 % of linear), the same at 60 %
-    # rated and 0.85-0.96 per um at 3 % rated; both-eccentrics 5 um: 40x 0.002 arcsec with one lateral spring
+    # centres, a softer support path: the same offset then turned the disc more); before that, 1, 5,
+    # 10 um gave 4.23, 8.35 arcsec (within 1.5 % of linear), the same at 60 % rated and 0.85-0.96 per
+    # um at 3 % rated; both-eccentrics 5 um: 40x 0.002 arcsec with one lateral spring
     # per crank; with the crank axis per disc plane the two discs' supports differ (end plate vs
     # clamped flange side, disc load shares ~45/55) and the cancellation is partial: measured 0.90 arcsec
     # against 3.76 for one eccentric (24 %).

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from fem import crank_tilt as ct
-from fem.tapered_roller import crank_support_positions_m
 from fem import hertz
+from fem.tapered_roller import crank_support_positions_m
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 E, NU = 206e9, 0.3

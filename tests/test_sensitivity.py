@@ -149,3 +149,9 @@ def test_bad_options_get_one_line_and_exit_2(tmp_path, capsys, extra, words):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and words in err[0]
     assert not (tmp_path / "s" / "variants").exists()
+
+
+def test_the_code_fingerprint_covers_exactly_the_stages_the_variants_run(tmp_path):
+    cmds = cmd_sensitivity._stage_commands(tmp_path / "case.toml", tmp_path)
+    assert [c[3] for c in cmds] == list(cmd_sensitivity.RUN_STAGES)
+
