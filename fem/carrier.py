@@ -44,7 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from fem import elastic, hertz
-from fem.joint_layers import JointLayers, layer_material
+from fem.joint_layers import JointLayers, joint_layer_tets, layer_material
 from fem.mesh import Mesh3D, MeshError, tet_mesh_from_solid, triangulate
 from geometry.carrier import CarrierGeometry
 
@@ -180,11 +180,13 @@ def carrier_mesh(g: CarrierGeometry, edge_length_m: float | None = None, *,
 
 
 # ----------------------------------------------------------------------------- assembly, solver
-def elasticity_matrix(mesh_sk, scalar_elem, vector_basis, E_Pa, nu, chunk: int = 4000) -> sp.csr_matrix:
+def elasticity_matrix(mesh_sk, scalar_elem, vector_basis, E_Pa, nu, chunk: int = 4000,
+                      shear_xz_Pa=None) -> sp.csr_matrix:
     """Isotropic elasticity with a modulus and a Poisson ratio per tet (or one for all) on `vector_basis`'s DOF numbering: the form of
     skfem.models.elasticity.linear_elasticity, a(u, v) = int lam div u div v + 2 mu eps(u):eps(v),
     from the scalar basis' gradients by one einsum per chunk (skfem's generic form, 900 pairs one by
-    one, measured 10x slower here); quadrature exact for affine tets (order 2p - 2)."""
+    one, measured 10x slower here); quadrature exact for affine tets (order 2p - 2). shear_xz_Pa: an
+    extra transverse shear modulus per tet on gamma_xz, gamma_yz (joint layers, fem.joint_layers)."""
     from skfem import Basis
     sb = Basis(mesh_sk, scalar_elem, intorder=max(2 * scalar_elem.maxdeg - 2, 1))
     if vector_basis.N != 3 * sb.N:
@@ -205,12 +207,19 @@ def elasticity_matrix(mesh_sk, scalar_elem, vector_basis, E_Pa, nu, chunk: int =
         lam, mu = lam_e[sl, None, None, None, None], mu_e[sl, None, None, None, None]
         Ke = lam * M + mu * M.transpose(0, 1, 4, 3, 2)
         Ke += mu * np.einsum("eakbk->eab", M)[:, :, None, :, None] * np.eye(3)[None, None, :, None, :]
+        if shear_xz_Pa is not None and np.any(shear_xz_Pa[sl]):   # + dG (u_i,z + u_z,i)(v_i,z + v_z,i), i = x, y
+            A = np.einsum("mik,akeq->maieq", _TRANSVERSE, G[:, :, sl], optimize=True)
+            Ke += np.einsum("eq,maieq,mbjeq->eaibj", sb.dx[sl] * shear_xz_Pa[sl, None], A, A, optimize=True)
         d = vdof[sb.element_dofs[:, sl].T]                      # (n, nloc, 3)
         rows.append(np.broadcast_to(d[:, :, :, None, None], Ke.shape).ravel())
         cols.append(np.broadcast_to(d[:, None, None, :, :], Ke.shape).ravel())
         vals.append(Ke.ravel())
     n = vector_basis.N
     return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+
+
+_TRANSVERSE = np.zeros((2, 3, 3))    # gamma_m = S[m, i, k] du_i/dx_k: gamma_xz, gamma_yz
+_TRANSVERSE[0, 0, 2] = _TRANSVERSE[0, 2, 0] = _TRANSVERSE[1, 1, 2] = _TRANSVERSE[1, 2, 1] = 1.0
 
 
 def node_ordered_lu_solve(K: sp.spmatrix, node: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -422,19 +431,6 @@ def seat_forces_per_Nm(crank_angles_rad, crank_circle_radius_m: float, flange_sh
 
 
 # ----------------------------------------------------------------------------- joint layers
-def joint_layer_tets(m3: Mesh3D, region: np.ndarray, g: CarrierGeometry) -> dict:
-    """Tets of the first element layer on each joint (pillar roots on the end plate, z > 0; flange
-    under its mounting face) and their layer thickness [m] (the extruded mesh's z-levels)."""
-    z = m3.points[m3.tetrahedra, 2]
-    zlo, zhi = z.min(axis=1), z.max(axis=1)
-    out = {}
-    for name, lab, sel in (("pillar", PILLAR, np.isclose(zlo, 0.0, atol=1e-9)),
-                           ("face", FLANGE, np.isclose(zhi, g.mounting_face_z_mm * 1e-3, atol=1e-9))):
-        idx = np.flatnonzero((region == lab) & sel)
-        out[name] = (idx, zhi[idx] - zlo[idx])
-    return out
-
-
 # ----------------------------------------------------------------------------- the FE model
 def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_length_m: float | None = None,
                        order: int = 2, plate_modulus_factor: float = 1.0, mesher: str = "extruded",
@@ -460,15 +456,16 @@ def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_lengt
     basis = Basis(msk, ElementVector(scalar))
     comp = _dof_components(basis)
     E_t = np.where(region == PILLAR, 1.0, plate_modulus_factor) * E_Pa
-    nu_t = np.full(len(region), float(nu))
+    nu_t, dG = np.full(len(region), float(nu)), np.zeros(len(region))
     if joints is not None and mesher == "extruded":
-        for name, (idx, hl) in joint_layer_tets(m3, region, g).items():
+        for name, (idx, hl) in joint_layer_tets(m3, region == PILLAR, region == FLANGE,
+                                                   g.mounting_face_z_mm * 1e-3).items():
             kn, kt = getattr(joints, f"{name}_normal_Pa_per_m"), getattr(joints, f"{name}_tangential_Pa_per_m")
             if kn is not None:
-                E_t[idx], nu_t[idx] = layer_material(hl, E_t[idx], nu, kn, kt)
+                E_t[idx], nu_t[idx], dG[idx] = layer_material(hl, E_t[idx], nu, kn, kt)
     elif joints is not None:
         raise ValueError("carrier joints need the extruded mesh (its z-levels give the layers)")
-    K = elasticity_matrix(msk, scalar, basis, E_t, nu_t)
+    K = elasticity_matrix(msk, scalar, basis, E_t, nu_t, shear_xz_Pa=dG if dG.any() else None)
     zf, rb, half = g.mounting_face_z_mm * 1e-3, g.bolt_circle_radius_mm * 1e-3, 0.5e-3 * BOLT_ANNULUS_WIDTH * g.bolt_circle_radius_mm
     held = lambda x: (x[2] > zf - 0.02 * h) & ((clamp == "face") | (abs(np.hypot(x[0], x[1]) - rb) <= half))  # noqa: E731
     fixed = basis.get_dofs(msk.facets_satisfying(held, boundaries_only=True)).all()
