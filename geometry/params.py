@@ -23,7 +23,9 @@ from typing import Any
 import numpy as np
 
 from geometry import spur
+from geometry import params_assembly
 from geometry.artifacts import InputError
+from geometry.params_assembly import Joints, MainBearings, _f
 from geometry.pin_profile import min_convex_radius_mm
 
 # Largest pin count accepted. Real cycloid reducers stay below it: RV reducers carry ~40 pins and
@@ -37,18 +39,6 @@ CASE_FILE_MAX_BYTES = 1 << 20                           # a case file is a few k
 
 class CaseError(InputError):
     """A case file that cannot describe a buildable reducer; the message names key, value, range."""
-
-
-def _f(lo: float | None = None, hi: float | None = None, *, open_lo: bool = True,
-       open_hi: bool = False, why: str = "", default: Any = dataclasses.MISSING) -> Any:
-    """A field with an allowed range (open at lo by default: sizes must be positive); `why` is
-    added to the message when a value falls outside."""
-    md = {"lo": lo, "hi": hi, "open_lo": open_lo, "open_hi": open_hi, "why": why}
-    if default is dataclasses.MISSING:
-        return field(metadata=md)
-    if isinstance(default, (list, tuple)):
-        return field(default=tuple(default), metadata=md)
-    return field(default=default, metadata=md)
 
 
 @dataclass(frozen=True)
@@ -264,7 +254,8 @@ class Tolerances:
 SECTIONS: dict[str, type] = {
     "cycloid": Cycloid, "modification": Modification, "stage1": Stage1, "carrier": Carrier,
     "disc": Disc, "crankshaft": Crankshaft, "material": Material, "operation": Operation,
-    "dynamics": Dynamics, "errors": Errors, "tolerances": Tolerances,
+    "dynamics": Dynamics, "joints": Joints, "main_bearings": MainBearings, "errors": Errors,
+    "tolerances": Tolerances,
 }
 OPTIONAL_SECTIONS = ("errors", "tolerances")
 
@@ -281,6 +272,8 @@ class ReducerCase:
     material: Material
     operation: Operation
     dynamics: Dynamics
+    joints: Joints
+    main_bearings: MainBearings
     errors: Errors = Errors()
     tolerances: Tolerances = Tolerances()
     source: str = ""   # path the case was read from, for messages
@@ -490,6 +483,9 @@ def validate(case: ReducerCase) -> ReducerCase:
                         f"maximum must exceed the rated torque ({op.rated_torque_Nm:g} N m); allowed > "
                         f"{op.rated_torque_Nm:g}")
     _check_errors(case)
+    bad = params_assembly.check(case.joints, case.main_bearings, w)
+    if bad:
+        raise CaseError(bad[0])
     _check_undercut(case)
     _check_stage1(case)
     return case
