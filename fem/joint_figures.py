@@ -16,7 +16,8 @@ ARCMIN = math.pi / 10800
 
 def support_seats(case, torque_Nm: float) -> dict:
     """Tangent radial compliance of one support bearing's cup seat and cone seat at the operating
-    load (fem.tapered_roller.operating_radial_load_N), and the cup's ring-on-seat figures."""
+    load (fem.tapered_roller.operating_radial_load_N), and the cup's ring-on-seat figures (the same
+    cup seat as a linear ring on the layer: a cross-check of cup_seat_m_per_N, not an addition)."""
     b = tapered_roller.case_bearing(case)
     jt, E = case.joints, case.material.youngs_modulus_GPa * 1e9
     F = tapered_roller.operating_radial_load_N(case, torque_Nm)
@@ -63,7 +64,8 @@ def pillar(case) -> dict:
     h = 1e-3
     return {"preload_N": bj.preload_N, "bolt_stiffness_N_per_m": bj.bolt_stiffness_N_per_m,
             "member_stiffness_N_per_m": bj.member_stiffness_N_per_m, "load_factor": bj.load_factor,
-            "face_area_m2": area, "face_pressure_Pa": pj.mid.pressure_Pa, "pressure_beyond_law": pj.mid.beyond_law, "pin_shear_N_per_m": k_pin,
+            "face_area_m2": area, "face_pressure_Pa": pj.mid.pressure_Pa, "pressure_beyond_law": pj.mid.beyond_law,
+            "pin_shear_N_per_m": k_pin,
             "normal_N_per_m": {b: getattr(pj, b).normal_stiffness_N_per_m for b in joints.BANDS},
             "tangential_N_per_m": {b: getattr(pj, b).tangential_stiffness_N_per_m for b in joints.BANDS},
             "E_layer_h1mm_Pa": {b: getattr(pj, b).E_layer_Pa(h) for b in joints.BANDS},

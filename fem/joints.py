@@ -7,8 +7,9 @@ steel surfaces under the nominal pressure p is delta = c p^m, m = 0.5, with c se
 (FINISHES: c in um / MPa^0.5, a range per finish class of the rougher surface's Ra). The middle of
 the range is the default ('mid'); 'low' (stiffer) and 'high' (softer) are its ends, so every figure
 below is a band. The data behind the law are machine-tool joints at nominal pressures of the order of
-tens of MPa; every result flags a pressure beyond P_LAW_MAX_PA (`beyond_law`). NOTE: the project's stored references do not hold the book's table; the class
-ranges are as read from Rivin ch. 4 and must be checked against it before they are quoted.
+tens of MPa; every result flags a pressure beyond P_LAW_MAX_PA (`beyond_law`). NOTE: the project's
+stored references do not hold the book's table; the class ranges are recalled from Rivin ch. 4, not
+verified here, and must be checked against the book before they are quoted.
 Tangent normal stiffness per area k_n = dp/d delta = p^(1 - m) / (m c) [N/m^3].
 Tangential stiffness per area k_t = k_n 2(1 - nu)/(2 - nu) (Mindlin's ratio for one circular
 contact, which holds for randomly rough interfaces too: Campana, Persson & Mueser, J. Phys.:

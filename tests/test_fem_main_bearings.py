@@ -191,3 +191,13 @@ def test_hard_end_closest_conformity_stays_in_the_hertz_fit_range():
     K = mb.hertz_point_constant(p.ball_diameter_m * (1 - g) / 2, 0.505 * p.ball_diameter_m / 0.01, E, NU)
     assert K == pytest.approx(exact_hertz_constant(p.ball_diameter_m * (1 - g) / 2, 0.505 * p.ball_diameter_m / 0.01,
                                                    E, NU), rel=0.07)
+
+
+def test_the_cup_as_a_ring_on_its_layer_agrees_with_the_flexible_ring_seat():
+    # two models of one seat: fem.joints' nonlinear layer under the roller-shaped load (flexible-ring
+    # limit, tangent at the load) and the linear ring on the layer's tangent at p_f + F / (D C);
+    # they differ by the ring's spreading and the linearisation: within 10 %
+    from fem import joint_figures
+    case = load_case(CASES / "rv40e-81.toml")
+    s = joint_figures.support_seats(case, case.rated_torque_Nm)
+    assert s["cup_ring_total_m_per_N"] == pytest.approx(s["cup_seat_m_per_N"], rel=0.10)
