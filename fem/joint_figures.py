@@ -16,7 +16,8 @@ ARCMIN = math.pi / 10800
 
 def support_seats(case, torque_Nm: float) -> dict:
     """Tangent radial compliance of one support bearing's cup seat and cone seat at the operating
-    load (fem.tapered_roller.operating_radial_load_N), and the cup's ring-on-seat figures."""
+    load (fem.tapered_roller.operating_radial_load_N), and the cup's ring-on-seat figures (the same
+    cup seat as a linear ring on the layer: a cross-check of cup_seat_m_per_N, not an addition)."""
     b = tapered_roller.case_bearing(case)
     jt, E = case.joints, case.material.youngs_modulus_GPa * 1e9
     F = tapered_roller.operating_radial_load_N(case, torque_Nm)
@@ -39,6 +40,7 @@ def support_seats(case, torque_Nm: float) -> dict:
             "cone_seat_m_per_N": cone.compliance_m_per_N, "cone_seat_band": cone.band_compliance_m_per_N,
             "seats_m_per_N": cup.compliance_m_per_N + cone.compliance_m_per_N,
             "seats_band": tuple(a + c for a, c in zip(cup.band_compliance_m_per_N, cone.band_compliance_m_per_N)),
+            "seat_pressure_beyond_law": cup.beyond_law or cone.beyond_law,
             "cup_ring_bending_m_per_N": ring.bending_m_per_N, "cup_ring_total_m_per_N": ring.compliance_m_per_N,
             "pressure_centre": support_rings.pressure_centre_moment_Nm(case, torque_Nm), "source": cup.source}
 
@@ -62,7 +64,8 @@ def pillar(case) -> dict:
     h = 1e-3
     return {"preload_N": bj.preload_N, "bolt_stiffness_N_per_m": bj.bolt_stiffness_N_per_m,
             "member_stiffness_N_per_m": bj.member_stiffness_N_per_m, "load_factor": bj.load_factor,
-            "face_area_m2": area, "face_pressure_Pa": pj.mid.pressure_Pa, "pin_shear_N_per_m": k_pin,
+            "face_area_m2": area, "face_pressure_Pa": pj.mid.pressure_Pa, "pressure_beyond_law": pj.mid.beyond_law,
+            "pin_shear_N_per_m": k_pin,
             "normal_N_per_m": {b: getattr(pj, b).normal_stiffness_N_per_m for b in joints.BANDS},
             "tangential_N_per_m": {b: getattr(pj, b).tangential_stiffness_N_per_m for b in joints.BANDS},
             "E_layer_h1mm_Pa": {b: getattr(pj, b).E_layer_Pa(h) for b in joints.BANDS},
@@ -80,7 +83,7 @@ def flange(case) -> dict:
                                       bolt_d_m=jt.output_bolt_thread_mm * 1e-3, plate_t_m=g_t, E_Pa=E,
                                       nu=case.material.poisson_ratio)
     to_arcmin = 1 / ARCMIN
-    return {"bolt_preload_N": F, "face_pressure_Pa": ff.pressure_Pa,
+    return {"bolt_preload_N": F, "face_pressure_Pa": ff.pressure_Pa, "pressure_beyond_law": ff.beyond_law,
             "compliance_arcmin_per_Nm": ff.compliance_rad_per_Nm * to_arcmin,
             "band_arcmin_per_Nm": tuple(c * to_arcmin for c in ff.band_compliance_rad_per_Nm),
             "slip_torque_Nm": ff.slip_torque_Nm, "slips_at_momentary": ff.slips,

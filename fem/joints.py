@@ -6,8 +6,10 @@ and Damping in Mechanical Design, 1999, ch. 4): the normal approach of two machi
 steel surfaces under the nominal pressure p is delta = c p^m, m = 0.5, with c set by the finish
 (FINISHES: c in um / MPa^0.5, a range per finish class of the rougher surface's Ra). The middle of
 the range is the default ('mid'); 'low' (stiffer) and 'high' (softer) are its ends, so every figure
-below is a band. NOTE: the project's stored references do not hold the book's table; the class
-ranges are as read from Rivin ch. 4 and must be checked against it before they are quoted.
+below is a band. The data behind the law are machine-tool joints at nominal pressures of the order of
+tens of MPa; every result flags a pressure beyond P_LAW_MAX_PA (`beyond_law`). NOTE: the project's
+stored references do not hold the book's table; the class ranges are recalled from Rivin ch. 4, not
+verified here, and must be checked against the book before they are quoted.
 Tangent normal stiffness per area k_n = dp/d delta = p^(1 - m) / (m c) [N/m^3].
 Tangential stiffness per area k_t = k_n 2(1 - nu)/(2 - nu) (Mindlin's ratio for one circular
 contact, which holds for randomly rough interfaces too: Campana, Persson & Mueser, J. Phys.:
@@ -52,6 +54,9 @@ from fem import bolts
 from geometry.artifacts import InputError
 
 M_EXP = 0.5                    # Levina's exponent for machined steel joints
+# ASSUMED: the order of the nominal pressures machine-joint data were taken at (tens of MPa); the
+# results flag a pressure beyond it as an extrapolation of the law
+P_LAW_MAX_PA = 50e6
 # Ra upper bound of the rougher face [um], finish, c low / high [um / MPa^0.5] (Rivin ch. 4, see doc)
 FINISHES = ((0.4, "fine ground / lapped", 0.3, 0.6), (1.6, "ground", 0.5, 1.0),
             (3.2, "fine turned / milled", 1.0, 2.0), (6.3, "turned / milled", 2.0, 3.0))
@@ -136,6 +141,11 @@ class RingSeat:
     fit_pressure_Pa: float
     source: str
 
+    @property
+    def beyond_law(self) -> bool:
+        """The layer's largest pressure is past the law's data (P_LAW_MAX_PA): an extrapolation."""
+        return self.fit_pressure_Pa + self.load_zone_peak_Pa > P_LAW_MAX_PA
+
 
 def _load_zone(n: float):
     s = lambda psi: np.cos(psi) ** n  # noqa: E731
@@ -181,6 +191,10 @@ class LayerJoint:
     E_steel_Pa: float
     G_steel_Pa: float
     band: str
+
+    @property
+    def beyond_law(self) -> bool:
+        return self.pressure_Pa > P_LAW_MAX_PA
 
     def E_layer_Pa(self, h_m: float) -> float:
         """Modulus of an FE layer of thickness h that adds the joint's normal compliance to the steel's."""
@@ -229,6 +243,10 @@ class FlangeFace:
     slips: bool                           # at the checked torque
     bolt_shear_compliance_rad_per_Nm: float   # what carries the torque once it slips
     source: str
+
+    @property
+    def beyond_law(self) -> bool:
+        return self.pressure_Pa > P_LAW_MAX_PA
 
 
 def flange_face_torsional(inner_r_m: float, outer_r_m: float, preload_total_N: float, bolt_count: int,

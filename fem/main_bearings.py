@@ -249,8 +249,10 @@ def case_main_bearings(case, torque_Nm: float | None = None) -> dict:
             "operating_moment_Nm": ld["moment_Nm"], "operating_radial_N": ld["radial_N"],
             "tilt_rad": float(op.q[2]), "radial_m": float(op.q[0]), "unloaded_balls": op.unloaded_balls,
             "max_ball_load_N": float(op.ball_load_N.max()),
-            "check": {"zero_load_radial_N_per_m": zero.radial_stiffness_N_per_m, "closed_form_radial_N_per_m": k_rad,
-                      "zero_load_tilt_Nm_per_rad": zero.tilt_stiffness_Nm_per_rad, "closed_form_tilt_Nm_per_rad": k_tilt,
+            "check": {"zero_load_radial_N_per_m": zero.radial_stiffness_N_per_m,
+                      "closed_form_radial_N_per_m": k_rad,
+                      "zero_load_tilt_Nm_per_rad": zero.tilt_stiffness_Nm_per_rad,
+                      "closed_form_tilt_Nm_per_rad": k_tilt,
                       "radial_error": zero.radial_stiffness_N_per_m / k_rad - 1,
                       "tilt_error": zero.tilt_stiffness_Nm_per_rad / k_tilt - 1},
             "source": (f"{HERTZ_SOURCE}; back-to-back pair ball by ball (Jones / Harris), rigid rings, "

@@ -14,7 +14,9 @@ Check: with no foundation, two opposite forces W change the diameter by (pi/4 - 
 diametral load; tests/test_fem_main_bearings.py). `bending_m_per_N` is the part beyond the rigid
 ring (k != 1): what the ring's own flexibility adds to a rigid-ring bearing model; the k = 1 part
 is the seat layer under a rigid ring. fem.joints.ring_seat_radial is the flexible-ring limit (the
-layer sees the roller distribution itself): it bounds this model's total from above.
+layer sees the roller distribution itself, nonlinear, tangent at the load): the two are one physics
+seen twice, so a model takes the seat's compliance from ONE of them, never both (on the RV-40E cup
+they agree within 2 %: tests/test_fem_main_bearings.py).
 
 Pressure-centre moment (pressure_centre_moment_Nm): a tapered roller bearing's radial reaction
 acts at its pressure centre, a = (D_pw / 2) tan(alpha) from the contact mid-plane (inside the pair

@@ -22,8 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from geometry import spur
-from geometry import params_assembly
+from geometry import params_assembly, spur
 from geometry.artifacts import InputError
 from geometry.params_assembly import Joints, MainBearings, _f
 from geometry.pin_profile import min_convex_radius_mm

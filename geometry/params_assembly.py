@@ -39,6 +39,8 @@ _RA = dict(why=f"the contact-layer law's finish classes end at Ra {RA_MAX_UM} um
                f"a rougher face is no bearing seat or flange face")
 _THREAD = dict(why="ISO 261 coarse threads M3..M24 (fem.bolts)")
 _CLASS = dict(why="ISO 898-1 property classes 8.8, 10.9, 12.9 (fem.bolts)")
+_CONF = dict(why="groove radius / ball diameter of real bearings, 0.505..0.56; closer to 0.5 the contact "
+                 "ellipse leaves the range of fem.main_bearings' Hertz approximation (R_y / R_x > 100)")
 _FIT = dict(why="mean diametral interference of a bearing fit (ISO 286 with ISO 492 ring tolerances); "
                 "a clearance fit is not a seat the load-zone layer model holds, > 50 um is no bearing fit")
 
@@ -71,10 +73,8 @@ class MainBearings:
     ball_diameter_mm: float = _f(0.0)
     ball_count: int = _f(3, 400, open_lo=False)
     contact_angle_deg: float = _f(0.0, 60.0, why="angular contact ball bearings: 15..45 deg, 60 deg the steepest")
-    inner_conformity: float = _f(0.5, 0.6, why="groove radius / ball diameter: 0.5 conforms fully, "
-                                                 "real bearings 0.505..0.56")
-    outer_conformity: float = _f(0.5, 0.6, why="groove radius / ball diameter: 0.5 conforms fully, "
-                                                 "real bearings 0.505..0.56")
+    inner_conformity: float = _f(0.505, 0.6, open_lo=False, **_CONF)
+    outer_conformity: float = _f(0.505, 0.6, open_lo=False, **_CONF)
     spacing_mm: float = _f(0.0)                                  # between the two rows' centres
     preload_N: float = _f(0.0)                                   # axial, each row, no external load
 

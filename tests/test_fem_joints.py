@@ -193,3 +193,17 @@ def test_shipped_cases_give_finite_joint_figures(name):
     assert p["E_layer_h1mm_Pa"]["high"] < p["E_layer_h1mm_Pa"]["mid"] < p["E_layer_h1mm_Pa"]["low"] < E
     f = joint_figures.flange(case)
     assert not f["slips_at_momentary"]
+
+
+def test_hard_end_largest_interference_and_roughest_seat_still_solve():
+    law = joints.contact_law(6.3, "high")
+    p = joints.fit_pressure_Pa(50e-6, 0.017, 0.0, 0.0227, E, law)     # the case's largest interference
+    lam = joints.lame_fit_compliance_m_per_Pa(0.017, 0.0, 0.0227, E)
+    assert lam * p + float(law.approach_m(p)) == pytest.approx(25e-6, rel=1e-6)
+    r = joints.ring_seat_radial(1e5, 0.017, 0.012, p, 6.3)
+    assert 0 < r.band_compliance_m_per_N[0] < r.compliance_m_per_N < r.band_compliance_m_per_N[1]
+
+
+def test_a_pressure_past_the_laws_data_is_flagged():
+    assert joints.pillar_joint_layer(17e3, 6.5e-5, 1.6).mid.beyond_law          # 260 MPa
+    assert not joints.pillar_joint_layer(17e3, 1e-3, 1.6).mid.beyond_law        # 17 MPa

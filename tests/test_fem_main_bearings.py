@@ -173,3 +173,31 @@ def test_pressure_centre_moment_is_the_reaction_times_the_offset():
     from fem import tapered_roller
     assert m["torque_part_Nm"] == pytest.approx(
         tapered_roller.crank_support_load_N(case, 412.0)["radial_N"] * m["offset_m"], rel=1e-12)
+
+
+def test_hard_end_steep_angle_and_loose_conformity_match_the_closed_form():
+    p = _pair(contact_angle_rad=math.radians(60), inner_conformity=0.6, outer_conformity=0.6)
+    s = mb.solve(p)
+    k_rad, k_tilt = mb.preloaded_closed_form(p)
+    assert s.radial_stiffness_N_per_m == pytest.approx(k_rad, rel=1e-6)
+    assert s.tilt_stiffness_Nm_per_rad == pytest.approx(k_tilt, rel=1e-6)
+
+
+def test_hard_end_closest_conformity_stays_in_the_hertz_fit_range():
+    p = _pair(inner_conformity=0.505, outer_conformity=0.505)
+    g = p.ball_diameter_m * math.cos(p.contact_angle_rad) / p.pitch_diameter_m
+    ar = (0.505 / 0.01) / ((1 - g) / 2)                                   # inner contact R_y / R_x
+    assert ar < 110
+    K = mb.hertz_point_constant(p.ball_diameter_m * (1 - g) / 2, 0.505 * p.ball_diameter_m / 0.01, E, NU)
+    assert K == pytest.approx(exact_hertz_constant(p.ball_diameter_m * (1 - g) / 2, 0.505 * p.ball_diameter_m / 0.01,
+                                                   E, NU), rel=0.07)
+
+
+def test_the_cup_as_a_ring_on_its_layer_agrees_with_the_flexible_ring_seat():
+    # two models of one seat: fem.joints' nonlinear layer under the roller-shaped load (flexible-ring
+    # limit, tangent at the load) and the linear ring on the layer's tangent at p_f + F / (D C);
+    # they differ by the ring's spreading and the linearisation: within 10 %
+    from fem import joint_figures
+    case = load_case(CASES / "rv40e-81.toml")
+    s = joint_figures.support_seats(case, case.rated_torque_Nm)
+    assert s["cup_ring_total_m_per_N"] == pytest.approx(s["cup_seat_m_per_N"], rel=0.10)
