@@ -63,12 +63,13 @@ def _compute(name: str, case, ctx: dict):
     return by_name(name).compute(case, ctx)
 
 
-NESTED = {"pin_series": PinSeries}   # StiffnessModel fields assembled from several components' "<field>.<key>"
+NESTED = {"pin_series": PinSeries}   # StiffnessModel fields assembled from several components' "<field>.<key>";
+                                     # "parts.<component>": the entries of components without a field
 
 
 def assemble(case, results: dict, extras: dict) -> StiffnessModel:
     """The StiffnessModel from the components' results (fields, sources, checks, extras)."""
-    fields, nested, sources, checks = {}, {k: {} for k in NESTED}, {}, {}
+    fields, nested, sources, checks = {}, {k: {} for k in (*NESTED, "parts")}, {}, {}
     for r in results.values():
         for k, v in r.fields.items():
             head, _, tail = k.partition(".")
@@ -76,7 +77,7 @@ def assemble(case, results: dict, extras: dict) -> StiffnessModel:
         sources.update(r.sources)
         checks.update(r.checks)
         extras.update(r.extras)
-    fields.update({k: NESTED[k](**v) for k, v in nested.items()})
+    fields.update({k: NESTED[k](**v) for k, v in nested.items() if k in NESTED}, parts=nested["parts"])
     return StiffnessModel(case_name=case.name, sources=sources, checks=checks, extras=extras, **fields)
 
 

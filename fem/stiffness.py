@@ -1,6 +1,6 @@
 """The stiffness artifact: what the FEM stage hands the dynamics stage (`stiffness.json`).
 
-Schema `rv-stiffness/3`, SI units in every key. Every compliance is an FE result of this project's
+Schema `rv-stiffness/4`, SI units in every key. Every compliance is an FE result of this project's
 own geometry or a closed form applied to stated geometry; `sources` says which, `checks` gives each
 one's FE-vs-closed-form comparison. No entry is scaled or fitted to a target.
 
@@ -38,7 +38,9 @@ made_from            what it was made from (geometry.fingerprint.Provenance: cas
                      mesh fingerprint); null only for models built in memory (tests). Read for a case
                      (`for_case`, `path_for_case`, `load(path, case)`), a file made from another case
                      or another version of it is refused. Schema 2 added made_from; schema 3 the support bearings,
-                     crank bending matrix, carrier and pin series parts (issue 11).
+                     crank bending matrix, carrier and pin series parts (issue 11); schema 4 `parts`: the
+                     entries of the components registered without a field of their own (joints,
+                     main_bearings, housing: fem.components, each with its to_json / from_json).
 
 Composition for the lumped model (pure functions of this file, so that the dynamics and the
 compliance budget read one definition): `support_compliance_parts` (crank-axis displacement per
@@ -56,7 +58,7 @@ from fem.components.entries import CarrierSeats, CrankBending, PinContact, PinSe
 from geometry.artifacts import InputError, read_json, write_json_atomic
 from geometry.fingerprint import Provenance
 
-SCHEMA = "rv-stiffness/3"
+SCHEMA = "rv-stiffness/4"
 
 # components of the compliance path, in path order: fem.components.REGISTRY (one module each)
 
@@ -174,6 +176,10 @@ class StiffnessModel:
                 made_from=made)
         except (KeyError, TypeError, ValueError) as exc:
             raise StiffnessError(f"{where}: missing or malformed entry {exc}") from None
+        missing = [c.NAME for c in REGISTRY if hasattr(c, "to_json") and c.NAME not in model.parts]
+        if missing:
+            raise StiffnessError(f"{where}: no parts entry for {', '.join(missing)} (schema {SCHEMA} needs every "
+                                 f"component of the path): rebuild it with `python -m pipeline fem`")
         model.check(where)
         return model
 
