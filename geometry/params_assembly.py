@@ -2,8 +2,6 @@
 the parts (`[joints]`: surface finish, bolts, pins, fits) and the built-in main bearing pair
 (`[main_bearings]`). Read by fem.joints, fem.bolts, fem.support_rings and fem.main_bearings.
 
-Also the home of the ranged-field helper `_f` every case section uses (geometry.params imports it),
-so the sections can live here without an import cycle.
 
 Ranges: a value outside is refused with key, value and the allowed range (geometry.params). The
 bounds are those of the laws used: the contact-layer law's finish classes end at Ra 6.3 um (turned
@@ -15,24 +13,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
+
+from geometry.case_fields import ranged as _f
 
 RA_MAX_UM = 6.3                          # roughest finish class of fem.joints (turned / milled)
 THREADS_MM = (3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 20.0, 24.0)   # ISO 261 coarse, fem.bolts
 PROPERTY_CLASSES = (8.8, 10.9, 12.9)     # ISO 898-1, fem.bolts
-
-
-def _f(lo: float | None = None, hi: float | None = None, *, open_lo: bool = True,
-       open_hi: bool = False, why: str = "", default: Any = dataclasses.MISSING) -> Any:
-    """A field with an allowed range (open at lo by default: sizes must be positive); `why` is
-    added to the message when a value falls outside."""
-    md = {"lo": lo, "hi": hi, "open_lo": open_lo, "open_hi": open_hi, "why": why}
-    if default is dataclasses.MISSING:
-        return field(metadata=md)
-    if isinstance(default, (list, tuple)):
-        return field(default=tuple(default), metadata=md)
-    return field(default=default, metadata=md)
 
 
 _RA = dict(why=f"the contact-layer law's finish classes end at Ra {RA_MAX_UM} um (turned/milled); "
