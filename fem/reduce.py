@@ -16,7 +16,7 @@ that the model's largest forces at the momentary torque lie inside the tables.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -41,6 +41,7 @@ class FemRun:
     model: StiffnessModel
     tooth_map: pin_contact.ToothPairMap
     crank_fields: dict
+    artifacts: dict = field(default_factory=dict)   # every component's in-memory artifacts (pictures)
 
 
 def table_loads_N(case) -> dict:
@@ -115,4 +116,5 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
                                    "needle_classical_at_momentary_N": float(tables["needle"][-1] / LOAD_MARGIN),
                                    "margin": LOAD_MARGIN}
     model.check(case.name)
-    return FemRun(model, tm, results["crank_torsion"].artifacts["crank_fields"])
+    artifacts = {k: v for r in results.values() for k, v in r.artifacts.items()}
+    return FemRun(model, tm, artifacts["crank_fields"], artifacts)

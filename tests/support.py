@@ -30,6 +30,9 @@ so that dynamics tests run fast and before/without the FE stage, with every figu
   joints         the support bearings' seat layers and cup bending at the rated load (fem.components.
                  joints.seat_compliance_m_per_N: closed forms); the carrier's joint layers left out
                  (they need the carrier FE): carrier_delta zero.
+  housing        one mode: the pin ring turning as the inner edge of an annulus clamped at the bolt
+                 circle, theta / T = (1/a^2 - 1/b^2) / (4 pi G t) (fem.housing_checks.annulus_torsion_rad_per_Nm),
+                 modal mass from the ring's polar inertia; no residual.
 """
 from __future__ import annotations
 
@@ -118,7 +121,16 @@ def _parts(case: ReducerCase) -> dict:
     from fem.components import joints, main_bearings
     k_rad, k_tilt = mb.preloaded_closed_form(mb.case_pair(case))
     nc = case.carrier.crank_count
-    return {"main_bearings": main_bearings.Entry(k_rad, k_tilt, main_bearings.plane_z_m(case)),
+    from fem.components import housing
+    from fem.housing_checks import annulus_torsion_rad_per_Nm
+    h, c, mat = case.housing, case.cycloid, case.material
+    a, b, t = c.pin_circle_radius_mm * 1e-3, h.bolt_circle_radius_mm * 1e-3, h.pin_ring_length_mm * 1e-3
+    k_theta = 1.0 / annulus_torsion_rad_per_Nm(a, b, mat.youngs_modulus_GPa * 1e9, mat.poisson_ratio, t)
+    th = 2 * np.pi * np.arange(c.zp) / c.zp
+    phi = np.column_stack([-np.sin(th), np.cos(th)]).reshape(-1, 1) / math.sqrt(c.zp)   # unit-norm turn of every pin
+    J = mat.density_kg_per_m3 * t * math.pi * (h.pin_ring_outer_radius_mm ** 4 - a ** 4 * 1e12) * 1e-12 / 2
+    ring = housing.Entry(phi, np.array([k_theta / (c.zp * a * a)]), np.array([J / (c.zp * a * a)]), 0.0)
+    return {"housing": ring, "main_bearings": main_bearings.Entry(k_rad, k_tilt, main_bearings.plane_z_m(case)),
             "joints": joints.Entry(np.zeros((4 * nc, 4 * nc)), joints.seat_compliance_m_per_N(case)["total_m_per_N"],
                                    (0.75, 1.5))}
 

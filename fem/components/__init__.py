@@ -6,11 +6,11 @@ iterate this list; nothing elsewhere branches on a component's name. A new compo
 module plus one line here."""
 from __future__ import annotations
 
-from fem.components import (carrier, crank_bending, crank_torsion, disc_body, involute_mesh, joints, main_bearings,
-                            needle_bearings, pin_contact, pin_groove, support_bearings)
+from fem.components import (carrier, crank_bending, crank_torsion, disc_body, housing, involute_mesh, joints,
+                            main_bearings, needle_bearings, pin_contact, pin_groove, support_bearings)
 
 REGISTRY = (involute_mesh, crank_torsion, support_bearings, crank_bending, carrier, joints, main_bearings,
-            needle_bearings, pin_contact, disc_body, pin_groove)
+            needle_bearings, pin_contact, disc_body, pin_groove, housing)
 COMPONENTS = tuple(m.NAME for m in REGISTRY)
 
 
