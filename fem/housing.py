@@ -524,3 +524,35 @@ def housing_for_case(case, *, h_m: float | None = None, checks: bool = True) -> 
                                      levels if h_m is None else tuple(g.pin_radius_m / h_m / np.array([2, 1.5, 1])))
     out.update(output_figures(fe, case))
     return dataclasses.replace(fe, check=out)
+
+
+def summary(fe: HousingFE, case, modes=(6, 10, 16)) -> dict:
+    """The budget's figures of a housing (what `python -m fem.housing` prints)."""
+    c, cd = fe.radial_compliance_m_per_N, fe.datum_radial_m_per_N
+    ck = fe.check
+    out = {"case": case.name, "dofs": fe.dofs, "elements": fe.elements, "seconds": fe.timings_s,
+           "radial_compliance_m_per_N": {"mean": float(c.mean()), "min": float(c.min()), "max": float(c.max())},
+           "radial_lobes": fe.radial_stiffness_lobes(4),
+           "datum_radial_compliance_m_per_N": {"mean": float(cd.mean()), "min": float(cd.min()), "max": float(cd.max())},
+           "datum_radial_lobes": fe.radial_stiffness_lobes(4, datum=True),
+           "kept_fraction": {n: {"mean": float(fe.modes(n).kept_fraction.mean()),
+                                 "min": float(fe.modes(n).kept_fraction.min())} for n in modes},
+           "housing_torsion_rad_per_Nm": fe.torsion_compliance_rad_per_Nm}
+    out["check"] = {k: v for k, v in ck.items()}
+    return out
+
+
+if __name__ == "__main__":
+    import argparse
+    import json
+    import sys
+    from geometry.params import load_case
+    ap = argparse.ArgumentParser(prog="python -m fem.housing", description="the housing FE's figures (JSON)")
+    ap.add_argument("--case", required=True)
+    args = ap.parse_args()
+    try:
+        cs = load_case(args.case)
+        print(json.dumps(summary(housing_for_case(cs), cs), indent=1, default=float))
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
