@@ -38,7 +38,9 @@ Verification (`check`): Lame annulus with its outer edge fixed and the clamped a
 (fem.housing_checks, closed forms), mesh convergence, reciprocity, equilibrium, the bolt pattern's
 symmetry (`bolt_symmetry`).
 Limits: 2D (no axial bending of the flange, no tilt from the two discs' axial offset), linear,
-frictionless, uniform thickness, rigid bolts; main-bearing seats not modelled.
+frictionless, uniform thickness, rigid bolts; main-bearing seats not modelled; a pin's load spreads
+over the whole ring length L in the section, while one disc loads its pin over its face width w:
+the local groove part is therefore about L / w too stiff here (fem.pin_groove carries it per disc).
 """
 from __future__ import annotations
 
@@ -55,7 +57,7 @@ from fem.disc_body import plane_stress_stiffness, rigid_modes, vector_basis
 from fem.mesh import Mesh2D, triangulate
 from geometry.artifacts import InputError
 
-GROOVE_ELEMENTS_PER_RADIUS = 3      # default element size on the grooves: Rr / 3 (convergence: housing_checks)
+GROOVE_ELEMENTS_PER_RADIUS = 3      # default element size on the grooves: Rr / 3 (check["convergence"])
 ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
 GRADING_PIN_RADII = 1.5             # interior element size doubles this many pin radii from a boundary
 
