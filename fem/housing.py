@@ -18,9 +18,12 @@ quadrature resultant is corrected to exactly F per pin.
 Seat displacement: the displacement work-conjugate to that pressure (a pressure-weighted mean over
 the seat), so C = G K^-1 G^T [m/N], (2 zp, 2 zp), rows/columns 2k (x) and 2k+1 (y) of pin k at
 2 pi k / zp, ground frame. It includes the groove's local deformation under the seat pressure
-(fem.pin_groove's series term holds the groove behind a Hertz-like contact to one pin pitch depth:
-the lead's budget must not count that twice; `check['local_groove_share']` says how much of the
-diagonal lies within one pin pitch of the groove).
+(fem.pin_groove's series term holds the groove behind the conformal contact down to a datum one pin
+pitch deep: that part is counted twice if both go in series). `local_radial_m_per_N` is each pin's
+radial compliance between its seat and that datum (the seat's radial displacement less the datum
+point's, under its own radial load; `check['local_groove_share']` its mean share of the radial
+diagonal), `datum_radial_m_per_N` the rest: the housing beyond the groove law under a pin's own load.
+The overlap cannot be taken out of C pin by pin (C less the local parts is indefinite, measured).
 Reduction (`HousingFE.modes`): the n most compliant eigenvectors of C, modal stiffness 1/lambda,
 modal masses of their displacement fields (Ritz, consistent mass of the section, density from the
 case), and the residual (C - Phi Lambda Phi^T) projected on each pin's radial direction (diagonal),
@@ -35,7 +38,9 @@ Verification (`check`): Lame annulus with its outer edge fixed and the clamped a
 (fem.housing_checks, closed forms), mesh convergence, reciprocity, equilibrium, the bolt pattern's
 symmetry (`bolt_symmetry`).
 Limits: 2D (no axial bending of the flange, no tilt from the two discs' axial offset), linear,
-frictionless, uniform thickness, rigid bolts; main-bearing seats not modelled.
+frictionless, uniform thickness, rigid bolts; main-bearing seats not modelled; a pin's load spreads
+over the whole ring length L in the section, while one disc loads its pin over its face width w:
+the local groove part is therefore about L / w too stiff here (fem.pin_groove carries it per disc).
 """
 from __future__ import annotations
 
@@ -52,7 +57,7 @@ from fem.disc_body import plane_stress_stiffness, rigid_modes, vector_basis
 from fem.mesh import Mesh2D, triangulate
 from geometry.artifacts import InputError
 
-GROOVE_ELEMENTS_PER_RADIUS = 3      # default element size on the grooves: Rr / 3 (convergence: housing_checks)
+GROOVE_ELEMENTS_PER_RADIUS = 3      # default element size on the grooves: Rr / 3 (check["convergence"])
 ARCMIN_PER_RAD = 180.0 * 60.0 / math.pi
 GRADING_PIN_RADII = 1.5             # interior element size doubles this many pin radii from a boundary
 
@@ -209,6 +214,26 @@ def seat_loads(basis, facets, centre, radius: float) -> np.ndarray:
     return np.linalg.solve(Rm.T, G)
 
 
+def datum_depth_m(g: HousingGeometry) -> float:
+    """fem.pin_groove's datum: one pin pitch behind the groove bottom."""
+    return 2 * math.pi * g.pin_circle_radius_m / g.pin_count
+
+
+def datum_radius_m(g: HousingGeometry) -> float:
+    """Radius of the datum points: one pin pitch behind the groove bottoms, at most 3/4 of the way
+    to the bolt holes' inner edge (a thinner wall: the datum stays clear of the clamp)."""
+    bottom = g.pin_circle_radius_m + g.pin_radius_m
+    return bottom + min(datum_depth_m(g), 0.75 * (g.bolt_circle_radius_m - g.bolt_hole_radius_m - bottom))
+
+
+def datum_probes(basis, g: HousingGeometry) -> sp.csr_matrix:
+    """(2 zp, N): displacement (x, y) of the datum point behind each groove."""
+    r, a = datum_radius_m(g), g.pin_angles_rad()
+    P = sp.csr_matrix(basis.probes(r * np.vstack([np.cos(a), np.sin(a)])))     # rows: all x, then all y
+    k = len(a)
+    return P[np.column_stack([np.arange(k), np.arange(k, 2 * k)]).ravel()]
+
+
 def mass_matrix(basis, density: float, thickness_m: float) -> sp.csr_matrix:
     from skfem import BilinearForm, asm
     from skfem.helpers import dot
@@ -276,13 +301,14 @@ class HousingModes:
     residual_radial_m_per_N: np.ndarray    # (zp,) e_r.(C - Phi Lambda Phi^T)_kk.e_r, in series per pin
     kept_fraction: np.ndarray              # (zp,) share of each pin's radial compliance the modes carry
     mass_matrix_kg: np.ndarray             # (n, n) Ritz mass matrix (off-diagonals: the modes' coupling)
-    stiffness_check: float                 # max |Psi^T K Psi - diag(1/lambda)| relative
+    stiffness_check: float                 # max |Psi^T K Psi - diag(1/lambda)| * lambda_1 (Ritz fields exact: ~0)
 
 
 @dataclass(frozen=True)
 class HousingFE:
     geometry: HousingGeometry
-    compliance_m_per_N: np.ndarray         # (2 zp, 2 zp), symmetric
+    compliance_m_per_N: np.ndarray         # (2 zp, 2 zp), symmetric: the seats
+    local_radial_m_per_N: np.ndarray       # (zp,) radial compliance between each seat and its datum
     h_m: float
     dofs: int
     elements: int
@@ -302,6 +328,11 @@ class HousingFE:
         return radial_diagonal(self.compliance_m_per_N, er)
 
     @property
+    def datum_radial_m_per_N(self) -> np.ndarray:
+        """(zp,) radial compliance of each pin's datum (one pin pitch behind the groove) under its own load."""
+        return self.radial_compliance_m_per_N - self.local_radial_m_per_N
+
+    @property
     def torsion_compliance_rad_per_Nm(self) -> float:
         """Ring rotation per N m on the housing, all pins loaded equally and tangentially."""
         _, et = pin_directions(self.geometry)
@@ -309,24 +340,27 @@ class HousingFE:
         return float(et @ self.compliance_m_per_N @ et) / (g.pin_count * g.pin_circle_radius_m) ** 2
 
     def modes(self, n: int) -> HousingModes:
+        """The n most compliant eigenvectors of C, their Ritz masses and the radial residual."""
         zp = self.geometry.pin_count
         if not (isinstance(n, (int, np.integer)) and 1 <= n <= 2 * zp):
             raise InputError(f"housing modes n = {n!r}: allowed a whole number 1 to 2 zp = {2 * zp}")
-        lam, V = np.linalg.eigh(self.compliance_m_per_N)
+        C = self.compliance_m_per_N
+        lam, V = np.linalg.eigh(C)
         lam, V = lam[::-1][:n], V[:, ::-1][:, :n]
         V = V * np.sign(V[np.argmax(np.abs(V), axis=0), np.arange(n)])      # deterministic sign
         # Ritz fields psi_j = U v_j / lambda_j: unit modal coordinate = pins displaced by v_j
         Mq = V.T @ self.mass_flexibility @ V / np.outer(lam, lam)
-        Kq = V.T @ self.compliance_m_per_N @ V / np.outer(lam, lam)         # = Psi^T K Psi
+        Kq = V.T @ self.compliance_m_per_N @ V / np.outer(lam, lam)         # = Psi^T K Psi (seat modes)
         er, _ = pin_directions(self.geometry)
-        full, part = radial_diagonal(self.compliance_m_per_N, er), radial_diagonal((V * lam) @ V.T, er)
+        full, part = radial_diagonal(C, er), radial_diagonal((V * lam) @ V.T, er)
         return HousingModes(V, 1 / lam, np.diag(Mq).copy(), full - part, part / full, Mq,
                             float(np.abs(Kq - np.diag(1 / lam)).max() * lam[0]))
 
-    def radial_stiffness_lobes(self, top: int = 8) -> dict:
-        """Fourier lobes of the per-pin radial stiffness k_k = 1 / c_k: {m: amplitude / mean} of the
-        `top` largest m = 1..zp/2 (a pattern with n_b-fold symmetry has only multiples of gcd(zp, n_b))."""
-        k = 1 / self.radial_compliance_m_per_N
+    def radial_stiffness_lobes(self, top: int = 8, *, datum: bool = False) -> dict:
+        """Fourier lobes of the per-pin radial stiffness k_k = 1 / c_k (of the datum's with `datum`):
+        {m: amplitude / mean} of the `top` largest m = 1..zp/2 (a pattern with n_b-fold symmetry has
+        only multiples of gcd(zp, n_b))."""
+        k = 1 / (self.datum_radial_m_per_N if datum else self.radial_compliance_m_per_N)
         X = np.fft.rfft(k) / len(k)
         amp = 2 * np.abs(X[1:]) / X[0].real
         if len(k) % 2 == 0:
@@ -387,19 +421,17 @@ def solve_housing(g: HousingGeometry, h_m: float) -> HousingFE:
              "equilibrium": float(np.abs(react + applied).max() / np.abs(applied).max()),
              "load_resultant_error": float(np.abs(applied[:2] - np.tile(np.eye(2), g.pin_count)).max()),
              "positive_definite": bool(np.linalg.eigvalsh(C).min() > 0)}
-    # how much of each pin's radial compliance lies within one pin pitch of its groove: the seat
-    # displacement less the radial displacement at depth one pitch behind the groove bottom
+    # each pin's radial compliance between its seat and fem.pin_groove's datum (one pin pitch behind
+    # the groove bottom, on the pin's radial; the datum's displacement under its own pin's load is a
+    # diagonal entry of D K^-1 G^T: as a matrix D K^-1 G^T is not reciprocal, measured 60 % asymmetric,
+    # and C less these diagonal parts is indefinite, measured: the overlap cannot be taken out pin by pin)
     er, _ = pin_directions(g)
-    pitch = 2 * math.pi * g.pin_circle_radius_m / g.pin_count
-    depth = g.pin_circle_radius_m + g.pin_radius_m + pitch
-    if depth < g.bolt_circle_radius_m - g.bolt_hole_radius_m:
-        P = basis.probes(np.array([[depth], [0.0]]))           # pin 0 at angle 0: radial = x
-        behind = float((P @ U[:, 0])[0])
-        check["local_groove_share"] = float(1 - behind / C[0, 0])
-        check["local_groove_depth_m"] = pitch
+    local = radial_diagonal(C, er) - radial_diagonal(datum_probes(basis, g) @ U, er)
+    check["local_groove_share"] = float(np.mean(local / radial_diagonal(C, er)))
+    check["datum_depth_m"] = datum_radius_m(g) - g.pin_circle_radius_m - g.pin_radius_m
     mf = U.T @ (M @ U)
     t4 = time.perf_counter()
-    return HousingFE(g, C, h_m, int(basis.N), int(hm.mesh.triangles.shape[0]),
+    return HousingFE(g, C, local, h_m, int(basis.N), int(hm.mesh.triangles.shape[0]),
                      {"mesh": t1 - t0, "assemble": t2 - t1, "factor_solve": t3 - t2, "condense": t4 - t3,
                       "total": t4 - t0},
                      check, _source(g), hm, basis, U, mf, K)
@@ -494,3 +526,35 @@ def housing_for_case(case, *, h_m: float | None = None, checks: bool = True) -> 
                                      levels if h_m is None else tuple(g.pin_radius_m / h_m / np.array([2, 1.5, 1])))
     out.update(output_figures(fe, case))
     return dataclasses.replace(fe, check=out)
+
+
+def summary(fe: HousingFE, case, modes=(6, 10, 16)) -> dict:
+    """The budget's figures of a housing (what `python -m fem.housing` prints)."""
+    c, cd = fe.radial_compliance_m_per_N, fe.datum_radial_m_per_N
+    ck = fe.check
+    out = {"case": case.name, "dofs": fe.dofs, "elements": fe.elements, "seconds": fe.timings_s,
+           "radial_compliance_m_per_N": {"mean": float(c.mean()), "min": float(c.min()), "max": float(c.max())},
+           "radial_lobes": fe.radial_stiffness_lobes(4),
+           "datum_radial_compliance_m_per_N": {"mean": float(cd.mean()), "min": float(cd.min()), "max": float(cd.max())},
+           "datum_radial_lobes": fe.radial_stiffness_lobes(4, datum=True),
+           "kept_fraction": {n: {"mean": float(fe.modes(n).kept_fraction.mean()),
+                                 "min": float(fe.modes(n).kept_fraction.min())} for n in modes},
+           "housing_torsion_rad_per_Nm": fe.torsion_compliance_rad_per_Nm}
+    out["check"] = {k: v for k, v in ck.items()}
+    return out
+
+
+if __name__ == "__main__":
+    import argparse
+    import json
+    import sys
+    from geometry.params import load_case
+    ap = argparse.ArgumentParser(prog="python -m fem.housing", description="the housing FE's figures (JSON)")
+    ap.add_argument("--case", required=True)
+    args = ap.parse_args()
+    try:
+        cs = load_case(args.case)
+        print(json.dumps(summary(housing_for_case(cs), cs), indent=1, default=float))
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)

@@ -225,10 +225,12 @@ def load_sharing(path, pin_angle_deg: np.ndarray, pin_force_N: np.ndarray, cycle
 
 def housing_section(path, points_m: np.ndarray, triangles: np.ndarray, displacement_m: np.ndarray,
                     von_mises_Pa: np.ndarray, pin_xy_m: np.ndarray, pin_force_N: np.ndarray, bolt_xy_m: np.ndarray,
-                    bolt_radius_m: float, radial_stiffness_N_per_m: np.ndarray, lobes: dict, *, title: str) -> None:
+                    bolt_radius_m: float, radial_stiffness_N_per_m: np.ndarray, lobes: dict, *, title: str,
+                    datum_stiffness_N_per_m: np.ndarray | None = None) -> None:
     """The housing section (fem.housing): von Mises on the deformed mesh under one disc's pin forces
     (displacements magnified), a zoom on the most loaded grooves with the mesh, and the per-pin
-    radial stiffness around the ring with its Fourier lobes."""
+    radial stiffness around the ring with its Fourier lobes (and, when given, that of the datum
+    one pin pitch behind each groove: the housing beyond the groove law)."""
     import matplotlib.tri as mtri
     from matplotlib.patches import Circle
     p, u = points_m * 1e3, displacement_m * 1e3
@@ -264,17 +266,22 @@ def housing_section(path, points_m: np.ndarray, triangles: np.ndarray, displacem
     ang = np.degrees(np.arctan2(pin_xy_m[:, 1], pin_xy_m[:, 0])) % 360
     order = np.argsort(ang)
     k = radial_stiffness_N_per_m / 1e6
-    ax.plot(ang[order], k[order], "o-", color="#1b9e77", ms=4)
-    ax.axhline(float(k.mean()), color="0.5", lw=0.8, ls="--", label=f"mean {k.mean():.0f} N/um")
+    ax.plot(ang[order], k[order], "o-", color="#1b9e77", ms=4, label="seat (groove surface)")
+    ax.axhline(float(k.mean()), color="0.5", lw=0.8, ls="--", label=f"seat mean {k.mean():.0f} N/um")
+    if datum_stiffness_N_per_m is not None:
+        kd = datum_stiffness_N_per_m / 1e6
+        ax.plot(ang[order], kd[order], "s-", color="#7570b3", ms=3, lw=0.8,
+                label=f"datum one pin pitch behind (mean {kd.mean():.0f} N/um)")
     for b in np.degrees(np.arctan2(bolt_xy_m[:, 1], bolt_xy_m[:, 0])) % 360:
         ax.axvline(b, color="#c0392b", lw=0.6, alpha=0.5)
     ax.plot([], [], color="#c0392b", lw=0.6, label="bolt angles")
     big = sorted(((m, v) for m, v in lobes.items() if v > 1e-4), key=lambda kv: -kv[1])[:4]
     text = ", ".join(f"m={m}: {100 * v:.2f} %" for m, v in big) or "none above 0.01 %"
-    ax.set_title(f"per-pin radial stiffness; lobes (of the mean) {text}", fontsize=9)
+    ax.set_title(f"per-pin radial stiffness; seat lobes (of the mean) {text}", fontsize=9)
     ax.set_xlabel("pin angle [deg]")
     ax.set_ylabel("radial stiffness [N/um]")
     ax.grid(True, lw=0.3)
-    ax.legend(loc="lower right", fontsize=8)
+    ax.set_yscale("log")
+    ax.legend(loc="center right", fontsize=8)
     fig.suptitle(title)
     save_figure(fig, path)

@@ -25,7 +25,8 @@ def housing_png(case, path, fe=None) -> None:
                             fld["von_mises_Pa"], pins, F, g.bolt_centres_m(), g.bolt_hole_radius_m,
                             1 / fe.radial_compliance_m_per_N, fe.radial_stiffness_lobes(4),
                             title=f"{case.name}: housing section at rated torque {case.rated_torque_Nm:g} N m "
-                                  f"(disc 1, crank angle 0), {g.bolt_count} bolts, {fe.dofs} DOFs")
+                                  f"(disc 1, crank angle 0), {g.bolt_count} bolts, {fe.dofs} DOFs",
+                            datum_stiffness_N_per_m=1 / fe.datum_radial_m_per_N)
 
 
 def main(argv=None) -> int:

@@ -58,6 +58,15 @@ def test_the_pin_compliance_is_reciprocal_positive_and_in_equilibrium(fe):
     assert 0.01 < (e1 @ C[2:4, 0:2] @ e0) / (e0 @ C[0:2, 0:2] @ e0) < 1.0
 
 
+def test_the_groove_datum_splits_each_pins_radial_compliance(fe):
+    # the datum one pin pitch (10 mm) behind the groove: the seat moves more than the datum, the
+    # datum more than nothing, and the bolt pattern modulates the far part more than the whole
+    assert fe.check["datum_depth_m"] == pytest.approx(2 * math.pi * 64e-3 / 40)
+    assert np.all(fe.local_radial_m_per_N > 0) and np.all(fe.datum_radial_m_per_N > 0)
+    assert 0.3 < fe.check["local_groove_share"] < 0.9
+    assert fe.radial_stiffness_lobes(1, datum=True)[16] > fe.radial_stiffness_lobes(1)[16]
+
+
 def test_the_bolt_pattern_sets_the_lobes_of_the_pin_stiffness(case, fe):
     # 16 bolts, 40 pins: the pattern repeats every 40 / gcd(40, 16) = 5 pins; lobes only at m = 8, 16
     s = housing.bolt_symmetry(fe)
