@@ -151,6 +151,11 @@ SPLITS = {  # coupling -> f(model, q, input_rad, dq, K_coupling) -> {component: 
 }
 
 
+def split_for(name: str):
+    """The split of coupling `name` (SPLITS, or the whole coupling for a one-component coupling)."""
+    return SPLITS.get(name) or whole(name)
+
+
 def tangent_state(model: ReducerModel, torque_Nm: float, input_angle_deg: float = 0.0):
     """(q*, input angle [rad], coupling tangents, dq per unit output torque) at a static equilibrium."""
     th = float(np.deg2rad(input_angle_deg))
@@ -170,7 +175,7 @@ def compliance_budget(model: ReducerModel, torque_Nm: float | None = None,
     by_coupling = energy_shares(Ks, dq)
     parts = dict.fromkeys(COMPONENTS, 0.0)
     for name, share in by_coupling.items():
-        split = SPLITS.get(name) or whole(name)
+        split = split_for(name)
         for comp, frac in normalised(split(model, q, th, dq, Ks[name])).items():
             parts[comp] += share * frac
     return {"torque_Nm": T, "input_angle_deg": float(input_angle_deg),
