@@ -23,16 +23,21 @@ class Params(NamedTuple):
     dof: np.ndarray            # (n,) housing block indices
 
 
-def modes(stiffness):
-    """The housing's kept modes of a stiffness model, or None."""
-    return stiffness.parts.get("housing")
+def modes(stiffness, layout):
+    """The housing's kept modes and their DOF indices, or None: a stiffness without a housing entry,
+    or a layout without the housing block (the housing then held rigid)."""
+    hm = stiffness.parts.get("housing")
+    names = [b.name for b in layout.blocks]
+    if hm is None or "housing" not in names or layout["housing"].count != len(hm.stiffness_N_per_m):
+        return None
+    return hm, layout["housing"].indices(0)
 
 
 def params(case, stiffness, layout, slots) -> Params:
-    hm = modes(stiffness)
-    k = np.zeros(0) if hm is None else np.asarray(hm.stiffness_N_per_m, float)
-    return Params(k_N_per_m=np.ascontiguousarray(k), dof=layout["housing"].indices(0) if len(k) else
-                  np.zeros(0, np.int64))
+    m = modes(stiffness, layout)
+    if m is None:
+        return Params(k_N_per_m=np.zeros(0), dof=np.zeros(0, np.int64))
+    return Params(k_N_per_m=np.ascontiguousarray(np.asarray(m[0].stiffness_N_per_m, float)), dof=m[1])
 
 
 @kernel(inline=True)

@@ -32,6 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dynamics.couplings.housing import modes as housing_modes
 from dynamics.couplings.base import foot_point, interp2, kernel, ramp
 from fem.stiffness import pin_law
 from geometry.params import lobe_sum
@@ -70,8 +71,8 @@ def params(case, stiffness, layout, slots) -> Params:
     R_disc = cy.pin_circle_radius_mm * 1e-3      # pitch errors are tangential at the pin circle
     pos, k_law, n_law, _ = pin_law(stiffness)
     disc = layout["disc"]
-    hm = stiffness.parts.get("housing")
-    phi = np.zeros((zp, 2, 0)) if hm is None else np.asarray(hm.phi, float).reshape(zp, 2, -1)
+    hm = housing_modes(stiffness, layout)
+    phi = np.zeros((zp, 2, 0)) if hm is None else np.asarray(hm[0].phi, float).reshape(zp, 2, -1)
     return Params(
         R_m=(cy.pin_circle_radius_mm + mod.offset_mm) * 1e-3,
         Rr_m=(cy.pin_radius_mm + mod.equidistant_mm) * 1e-3,
@@ -86,7 +87,7 @@ def params(case, stiffness, layout, slots) -> Params:
         disc_profile_lobes=_disc_lobes(er.disc_profile_lobes, nd, 1e-6),
         dof=np.column_stack([disc.indices("x"), disc.indices("y"), disc.indices("rot")]).astype(np.int64),
         housing_phi=np.ascontiguousarray(phi),
-        housing_dof=layout["housing"].indices(0) if phi.shape[2] else np.zeros(0, np.int64),
+        housing_dof=np.zeros(0, np.int64) if hm is None else hm[1],
         c0=slots.contacts("pin", (nd, zp), group=np.repeat(np.arange(nd), zp)))
 
 

@@ -57,7 +57,7 @@ def compute(case, ctx) -> Result:
                  radial_compliance_mean_m_per_N=float(np.mean(fe.radial_compliance_m_per_N)),
                  datum_radial_mean_m_per_N=float(np.mean(fe.datum_radial_m_per_N)),
                  series_in_pin_law_m_per_N=series,
-                 radial_stiffness_lobes=fe.radial_stiffness_lobes(),
+                 radial_stiffness_lobes={str(m): a for m, a in fe.radial_stiffness_lobes().items()},
                  torsion_compliance_rad_per_Nm=fe.torsion_compliance_rad_per_Nm,
                  modal_stiffness_check=hm.stiffness_check)
     return Result(NAME, {"parts.housing": e}, {NAME: fe.source + f"; {MODES} most compliant modes as DOFs, the rest "
