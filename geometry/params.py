@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from geometry import spur
-from geometry.artifacts import InputError
+from geometry.artifacts import InputError, read_text
 from geometry.pin_profile import min_convex_radius_mm
 
 # Largest pin count accepted. Real cycloid reducers stay below it: RV reducers carry ~40 pins and
@@ -534,25 +534,12 @@ def _check_undercut(case: ReducerCase) -> None:
 def load_case(path: str | Path) -> ReducerCase:
     """Read and validate a case file; raise CaseError naming key, value and allowed range."""
     path = Path(path)
+    text = read_text(path, what="case", error=CaseError, allowed="a case file is TOML text",
+                     max_bytes=CASE_FILE_MAX_BYTES,
+                     wording={"missing": "case file not found", "folder": "is a directory, not a case file",
+                              "not_utf8": "not a UTF-8 text file (byte {offset})"})
     try:
-        if path.is_dir():
-            raise CaseError(f"{path}: is a directory; expected a case file (TOML)")
-        if path.exists() and not path.is_file():
-            raise CaseError(f"{path}: not a regular file; expected a case file (TOML)")
-        if path.exists() and path.stat().st_size > CASE_FILE_MAX_BYTES:
-            raise CaseError(f"{path}: {path.stat().st_size} bytes; a case file is TOML text of at "
-                            f"most {CASE_FILE_MAX_BYTES} bytes")
-        text = path.read_bytes().decode("utf-8-sig")
         raw = tomllib.loads(text)
-    except FileNotFoundError:
-        raise CaseError(f"{path}: case file not found") from None
-    except PermissionError:
-        raise CaseError(f"{path}: cannot read the case file (permission denied)") from None
-    except OSError as exc:
-        raise CaseError(f"{path}: cannot read the case file ({exc.strerror or exc})") from None
-    except UnicodeDecodeError as exc:
-        raise CaseError(f"{path}: not a UTF-8 text file (byte {exc.start}); a case file is TOML "
-                        f"text") from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"{path}: not valid TOML ({' '.join(str(exc).split())})") from None
     return case_from_dict(raw, source=str(path))

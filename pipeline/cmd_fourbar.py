@@ -3,9 +3,8 @@
     python -m pipeline fourbar --case CASE.toml --out DIR [--stiffness PATH]
     python -m pipeline tolerance --case CASE.toml --samples N [--model fourbar|full] [--seed S] [--scheduler ADDRESS] --out DIR
 
-Forces come from the project's load-sharing solution (dynamics.model.solve_static) when that module
-is present, else from a statics estimate (dynamics.fourbar.statics_pair_loads); every artifact says
-which. Compliance comes from stiffness.json (default build/<case>/fem/stiffness.json). `--model full`
+Forces come from the lumped model's static load sharing (dynamics.fourbar.model_pair_loads); every
+artifact says so. Compliance comes from stiffness.json (default build/<case>/fem/stiffness.json). `--model full`
 runs dynamics.tolerance.full_monte_carlo (the lumped model; artifacts: pipeline.tolerance_full).
 """
 from __future__ import annotations
@@ -53,43 +52,6 @@ def _check_range(name: str, value: float, lo: float, hi: float) -> float:
     return value
 
 
-def pair_loads(case: ReducerCase, geom: fb.PairGeometry, stiffness, beta1_rad: float,
-               torque_Nm: float) -> fb.PairLoads:
-    """Turning-arm forces from the load-sharing solution, else the labelled statics estimate."""
-    try:
-        from dynamics import model as dm
-    except ModuleNotFoundError as exc:
-        if exc.name != "dynamics.model":
-            raise
-        return fb.statics_pair_loads(case, geom, beta1_rad, torque_Nm)
-    return loads_from_dynamics(dm, case, geom, stiffness, beta1_rad, torque_Nm)
-
-
-def loads_from_dynamics(dm, case: ReducerCase, geom: fb.PairGeometry, stiffness, beta1_rad: float,
-                        torque_Nm: float) -> fb.PairLoads:
-    """Solve the static load sharing at the input angle that puts crank pair (0, 1) at beta1."""
-    model = dm.build_model(case, stiffness)
-    s0 = dm.solve_static(model, 0.0, torque_Nm)
-    carrier0 = math.radians(s0.output_angle_deg)
-    psi0 = float(s0.crank_angle_rad[0]) - carrier0            # eccentric angle on the carrier
-    # the eccentric turns against the carrier (zc/zp - ...): measure its rate numerically
-    s1 = dm.solve_static(model, 1.0, torque_Nm)
-    rate = (float(s1.crank_angle_rad[0]) - math.radians(s1.output_angle_deg) - psi0)  # rad per input deg
-    rate = math.atan2(math.sin(rate), math.cos(rate))
-    target = beta1_rad + geom.ground_angle_rad
-    dpsi = math.atan2(math.sin(target - psi0), math.cos(target - psi0))
-    st = dm.solve_static(model, dpsi / rate, torque_Nm)
-    carrier = math.radians(st.output_angle_deg)
-    c, s = math.cos(-carrier), math.sin(-carrier)
-    rot = np.array([[c, -s], [s, c]])
-    f = np.asarray(st.bearing_force_N, float) @ rot.T            # (discs, cranks, 2), carrier frame
-    psi = float(st.crank_angle_rad[0]) - carrier
-    beta1 = math.atan2(math.sin(psi - geom.ground_angle_rad), math.cos(psi - geom.ground_angle_rad))
-    return fb.PairLoads(geom.to_pair_frame(f[0, :2]), geom.to_pair_frame(f[:, :2].sum(0)),
-                        float(torque_Nm), beta1,
-                        f"dynamics.model.solve_static (input {dpsi / rate:.3f} deg)")
-
-
 def _check_load(args, case: ReducerCase) -> tuple[float, float]:
     """(torque [N m], crank angle [rad]) of the elastic error, checked against the case."""
     torque = case.rated_torque_Nm if args.torque_Nm is None else args.torque_Nm
@@ -101,7 +63,7 @@ def _setup(args, case: ReducerCase):
     torque, beta1 = _check_load(args, case)
     stiff = _stiffness(case, args.stiffness)
     geom = fb.PairGeometry.from_case(case)
-    loads = pair_loads(case, geom, stiff, beta1, torque)
+    loads = fb.model_pair_loads(case, geom, stiff, beta1, torque)
     return geom, loads, fb.JointCompliance.from_stiffness(stiff)
 
 
