@@ -38,7 +38,7 @@ def nominal_q(model: ReducerModel, input_rad: float, lag_rad: float = 0.0) -> np
     q[io] = input_rad / model.ratio - lag_rad
     phi = _crank_phase(model, input_rad, q[io])
     q[lay["crank_rotation"].slice] = phi
-    E = model.case.cycloid.eccentricity_mm * 1e-3
+    E = model.case.si.eccentricity_m
     disc = lay["disc"]
     for d in range(model.n_disc):
         i = disc.index(d)

@@ -13,6 +13,7 @@ no cusp, no undercut of the modified profile, from the closed-form curvature of
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
 import tomllib
@@ -24,6 +25,7 @@ import numpy as np
 
 from geometry import spur
 from geometry.artifacts import InputError, read_text
+from geometry.case_si import CaseSI, case_si
 from geometry.pin_profile import min_convex_radius_mm
 
 # Largest pin count accepted. Real cycloid reducers stay below it: RV reducers carry ~40 pins and
@@ -293,6 +295,11 @@ class ReducerCase:
     @property
     def rated_torque_Nm(self) -> float:
         return self.operation.rated_torque_Nm
+
+    @functools.cached_property
+    def si(self) -> CaseSI:
+        """The sizes in SI units (m, Pa), converted once (geometry.case_si)."""
+        return case_si(self)
 
     def with_errors(self, **changes: Any) -> "ReducerCase":
         """A copy with some error sources changed (validated like the case file)."""

@@ -266,26 +266,6 @@ def _sigma_csv(tab, forms, torques) -> str:
     return buf.getvalue()
 
 
-def _plot_budget(budget: dict, title: str, path: Path) -> None:
-    """Horizontal bars: % of the output compliance per component at the budget's torque, each
-    labelled with its equivalent stiffness (tangent rigidity / share: that part alone in series)."""
-    from pipeline.render import figure, save_figure
-    rig = budget["tangent_rigidity_Nm_per_arcmin"]
-    items = sorted(budget["compliance_budget"].items(), key=lambda kv: kv[1])
-    fig, ax = figure(figsize=(8, 0.45 * len(items) + 1.5))
-    y = np.arange(len(items))
-    ax.barh(y, [100 * v for _, v in items], color="tab:blue")
-    ax.set_yticks(y, [f"{k}  ({rig / v:,.0f} N m/arcmin)" if v > 0 else f"{k}  (rigid)" for k, v in items])
-    for yi, (_, v) in zip(y, items):
-        ax.text(100 * v, yi, f" {100 * v:.1f} %", va="center", fontsize=8)
-    ax.set_xlabel("share of the output torsional compliance [%]")
-    ax.set_xlim(0, 100 * max(v for _, v in items) * 1.2 + 1e-9)
-    ax.set_title(f"{title}: compliance budget at {budget['torque_Nm']:g} N m "
-                 f"(tangent rigidity {rig:.0f} N m/arcmin)", fontsize=10)
-    ax.grid(True, axis="x", lw=0.3)
-    save_figure(fig, path)
-
-
 def _load_sharing(model, out: Path, points: int = 41) -> None:
     """load_sharing.json/.png: static pin forces at rated torque over one mesh cycle (the eccentric
     turning one pin pitch: input period 360 i / (zp zc) deg), input held at each angle."""
@@ -313,7 +293,7 @@ def _load_sharing(model, out: Path, points: int = 41) -> None:
 def cmd_hysteresis(args) -> int:
     from dynamics.budget import against_reference, compliance_budget
     from dynamics.catalog import hysteresis
-    from pipeline.figures import hysteresis_loop
+    from pipeline.figures import budget_bars, hysteresis_loop
     model, spath = _model(args)
     res = hysteresis(model)
     budget = compliance_budget(model)
@@ -339,7 +319,7 @@ def cmd_hysteresis(args) -> int:
                     lost_motion_arcmin=res.lost_motion_arcmin, backlash_arcmin=res.backlash_arcmin,
                     rated_Nm=res.rated_torque_Nm, title=f"{model.case.name}: catalog hysteresis test, input locked")
     _load_sharing(model, out)
-    _plot_budget(budget, model.case.name, out / "compliance_budget.png")
+    budget_bars(out / "compliance_budget.png", budget, model.case.name)
     _say(args, f"hysteresis: {out}/hysteresis.json: rigidity {res.torsional_rigidity_Nm_per_arcmin:.1f} "
                f"N m/arcmin, lost motion {res.lost_motion_arcmin:.3f} arcmin, backlash {res.backlash_arcmin:.3f} arcmin")
     top = sorted(budget["compliance_budget"].items(), key=lambda kv: -kv[1])

@@ -144,7 +144,8 @@ def run_fourbar(args) -> int:
             for s in fb.MAIN_SOURCES}
     write_text_atomic(out / "comparison.md",
                       comparison_md(case, geom, loads, base, dev, singles, pairs, paper72, scan, args))
-    _figures(out, dev, singles, pairs, scan)
+    from pipeline.figures import fourbar_sweeps
+    fourbar_sweeps(out, dev, singles, pairs, scan, LABELS)
     write_json_atomic(out / "fourbar.json", {
         "made_from": _made_from(case, args, "rv-fourbar/1"),
         "case": case.name, "torque_Nm": loads.torque_Nm, "crank_angle_deg": math.degrees(loads.beta1_rad),
@@ -284,39 +285,6 @@ Why we disagree with the paper where we do:
   accuracy, and it is where the FE compliance and our load sharing enter.
 """)
     return "\n".join(L) + "\n"
-
-
-def _figures(out: Path, dev, singles, pairs, scan) -> None:
-    from pipeline.render import figure, save_figure
-    A = fb.ARCSEC_PER_RAD
-    fig, ax = figure(1, 2, figsize=(11, 4))
-    for s, sw in singles.items():
-        ax[0].plot(dev * 1e3, sw.rigid_rad * A, label=LABELS[s])
-        ax[1].plot(dev * 1e3, sw.elastic_rad * A, label=LABELS[s])
-    for a, t in zip(ax, ("rigid", "elastic")):
-        a.set_xlabel("deviation [um]"); a.set_ylabel("output-angle error [arcsec]"); a.set_title(t)
-        a.axhline(60, ls=":", c="gray"); a.axhline(-60, ls=":", c="gray"); a.grid(alpha=0.3)
-    ax[0].legend(fontsize=7)
-    save_figure(fig, out / "individual.png")
-    for (a, b), sw in pairs.items():
-        fig = figure(figsize=(11, 4.5))[0]
-        fig.clf()
-        X, Y = np.meshgrid(dev * 1e3, dev * 1e3, indexing="ij")
-        for k, (z, t) in enumerate(((sw.rigid_rad, "rigid"), (sw.elastic_rad, "elastic"))):
-            ax3 = fig.add_subplot(1, 2, k + 1, projection="3d")
-            ax3.plot_surface(X, Y, z * A, cmap="viridis")
-            ax3.set_xlabel(f"{a} [um]", fontsize=8); ax3.set_ylabel(f"{b} [um]", fontsize=8)
-            ax3.set_zlabel("error [arcsec]", fontsize=8); ax3.set_title(t)
-        save_figure(fig, out / f"surface_{a}_{b}.png")
-    fig, ax = figure(figsize=(7, 4))
-    for s, v in scan.items():
-        ax.plot(v["beta1_deg"], v["exact_rad"] * A, label=f"{s} exact")
-        ax.plot(v["beta1_deg"], v["quadratic_rad"] * A, "--", label=f"{s} quadratic")
-    ax.set_yscale("symlog", linthresh=1.0)
-    ax.set_xlabel("crank angle beta1 [deg]"); ax.set_ylabel("rigid output-angle error [arcsec]")
-    ax.set_title("exact closure vs paper's quadratic (+max deviation, no load)"); ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
-    save_figure(fig, out / "crank_angle_scan.png")
 
 
 # ---------------------------------------------------------------- tolerance
