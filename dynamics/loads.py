@@ -20,14 +20,18 @@ RAMP_S = 1.0   # paper 001: input speed ramps over 0..1 s
 
 # A robot joint's pick-and-place cycle as a trapezoidal torque profile (ASSUMED; no bench or paper
 # here gives one): one 1 s cycle (a 6-axis robot of the RV-40E's payload class moves a part in
-# ~0.5-1 s) after the 1 s speed ramp: the torque rises linearly from 0 to T in TRAPEZOID_RAMP_S
-# (the jerk-limited acceleration ramp of the motion planner), dwells at T while the joint carries
-# and accelerates the payload, falls to 0 in TRAPEZOID_RAMP_S and dwells unloaded while the gripper
-# picks or places; the ramps and dwells are stated here, the load gradient T is the user's.
+# ~0.5-1 s) after the 1 s speed ramp: the torque rises linearly from the holding level to T in
+# TRAPEZOID_RAMP_S (the jerk-limited acceleration ramp of the motion planner), dwells at T while the
+# joint carries and accelerates the payload, falls back in TRAPEZOID_RAMP_S and dwells at the
+# holding level while the gripper picks or places. The holding level is the arm's own gravity
+# moment, which a vertical joint always carries: ASSUMED half of T. (A cycle down to zero torque
+# crosses the backlash at every cycle; at the default step the model then reports contacts that
+# closed between candidate refreshes: rv40e-81, 300 N m, dt 1e-4 s.) The load gradient T is the user's.
 TRAPEZOID_START_S = 1.0      # first rise when the input has reached its speed (like paper 001's loads)
 TRAPEZOID_PERIOD_S = 1.0     # one pick-and-place cycle
 TRAPEZOID_RAMP_S = 0.1       # rise and fall, each
-TRAPEZOID_DWELL_S = 0.4      # at T, and again at 0 (2 ramps + 2 dwells = the period)
+TRAPEZOID_DWELL_S = 0.4      # at T, and again at the holding level (2 ramps + 2 dwells = the period)
+TRAPEZOID_HOLD = 0.5         # holding level / T
 
 
 class LoadSpecError(InputError):
@@ -56,11 +60,13 @@ def _sine(t, T):
 
 
 def _trapezoid(t, T):
-    """0 before TRAPEZOID_START_S, then per cycle: ramp 0 -> T, dwell at T, ramp T -> 0, dwell at 0."""
+    """Holding level TRAPEZOID_HOLD T until TRAPEZOID_START_S, then per cycle: ramp to T, dwell at T,
+    ramp back, dwell at the holding level."""
     tau = np.mod(t - TRAPEZOID_START_S, TRAPEZOID_PERIOD_S)
     r, d = TRAPEZOID_RAMP_S, TRAPEZOID_DWELL_S
     level = np.clip(np.minimum(tau / r, (2 * r + d - tau) / r), 0.0, 1.0)
-    return np.where(t < TRAPEZOID_START_S, 0.0, T * level)
+    level = np.where(t < TRAPEZOID_START_S, 0.0, level)
+    return T * (TRAPEZOID_HOLD + (1.0 - TRAPEZOID_HOLD) * level)
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ torque) runs through simulate, the matrix and the report by its table entry alon
 import numpy as np
 import pytest
 
-from dynamics.loads import (FORMS, LOAD_FORMS, PAPER_001_FORMS, TRAPEZOID_DWELL_S, TRAPEZOID_PERIOD_S,
+from dynamics.loads import (FORMS, LOAD_FORMS, PAPER_001_FORMS, TRAPEZOID_DWELL_S, TRAPEZOID_HOLD, TRAPEZOID_PERIOD_S,
                             TRAPEZOID_RAMP_S, TRAPEZOID_START_S, LoadSpec, LoadSpecError, load_form, load_torque_Nm)
 
 T = 300.0
@@ -47,6 +47,8 @@ def test_the_trapezoid_ramps_dwells_and_repeats_as_stated():
     for k in (0, 3):                             # first and fourth cycle
         s = t0 + k * TRAPEZOID_PERIOD_S
         at = [s - 0.5 * d, s, s + r / 2, s + r, s + r + d / 2, s + r + d + r / 2, s + 2 * r + d, s + 2 * r + 1.5 * d]
-        expect = [0.0, 0.0, T / 2, T, T, T / 2, 0.0, 0.0]
+        h, mid = TRAPEZOID_HOLD * T, (1 + TRAPEZOID_HOLD) * T / 2     # holding level, half-way up a ramp
+        expect = [h, h, mid, T, T, mid, h, h]
         assert load_torque_Nm(LoadSpec("trapezoid", T), np.array(at)) == pytest.approx(expect, abs=1e-9 * T)
-    assert np.all(load_torque_Nm(LoadSpec("trapezoid", T), np.linspace(0, t0 - 1e-9, 50)) == 0.0)
+    assert np.all(load_torque_Nm(LoadSpec("trapezoid", T), np.linspace(0, t0 - 1e-9, 50)) == TRAPEZOID_HOLD * T)
+    assert 0.0 < TRAPEZOID_HOLD < 1.0                 # loaded throughout, never beyond T
