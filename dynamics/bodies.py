@@ -15,9 +15,9 @@ import math
 from geometry.case_si import MM
 
 
-def inertias(case) -> dict:
+def inertias(case, stiffness=None) -> dict:
     """Per DOF block of `dynamics.layout.DofLayout.standard`, the mass [kg] or inertia [kg m^2]
-    of each component of one item."""
+    of each component of one item (the housing: each mode's modal mass, from its FE)."""
     cy, cr, si = case.cycloid, case.carrier, case.si
     nc, nd = cr.crank_count, cy.disc_count
     rho = case.material.density_kg_per_m3
@@ -40,5 +40,6 @@ def inertias(case) -> dict:
     m_carrier = rho * math.pi * r_f ** 2 * 2 * w
     j_out = m_carrier * r_f ** 2 / 2 + case.dynamics.load_inertia_kg_m2 + nc * m_crank * a ** 2
     # the crank's lateral mass lumped equally at its disc planes (crank_axis: one item per plane)
+    hm = None if stiffness is None else stiffness.parts.get("housing")
     return {"carrier": [j_out], "crank_rotation": [j_crank], "crank_axis": [m_crank / nd, m_crank / nd],
-            "disc": [m_disc, m_disc, j_disc]}
+            "disc": [m_disc, m_disc, j_disc], "housing": [] if hm is None else list(hm.mass_kg)}
