@@ -18,7 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dynamics.model import ReducerModel, quasi_static
+from dynamics.reducer import ReducerModel
+from dynamics.statics import quasi_static
 
 ZERO_FRACTION = 1e-4
 ARCMIN_PER_RAD = 180 * 60 / np.pi

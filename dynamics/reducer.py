@@ -103,7 +103,7 @@ def build_model(case: ReducerCase, stiffness: StiffnessModel) -> ReducerModel:
     return ReducerModel(case=case, stiffness=stiffness, layout=layout, arrays=arrays, slots=slots,
                         mass=layout.vector(bodies.inertias(case, stiffness)), scale=layout.scale(ROT_SCALE_M),
                         ratio=case.ratio,
-                        coaxiality_rad=er.output_coaxiality_um * 1e-6 / (case.carrier.output_flange_radius_mm * 1e-3),
+                        coaxiality_rad=er.output_coaxiality_um * 1e-6 / case.si.output_flange_radius_m,
                         coaxiality_phase_rad=np.deg2rad(er.output_coaxiality_phase_deg),
                         reading_lobes=np.array([(m, a * 1e-3 / case.carrier.output_flange_radius_mm, np.deg2rad(ph))
                                                 for m, a, ph in er.output_reading_lobes], float).reshape(-1, 3))

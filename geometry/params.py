@@ -13,6 +13,7 @@ no cusp, no undercut of the modified profile, from the closed-form curvature of
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
 import tomllib
@@ -23,7 +24,9 @@ from typing import Any
 import numpy as np
 
 from geometry import params_assembly, spur
+from geometry.artifacts import read_text
 from geometry.case_fields import CaseError, ranged as _f, where as _where
+from geometry.case_si import CaseSI, case_si
 from geometry.params_assembly import Joints, MainBearings
 from geometry.pin_profile import min_convex_radius_mm
 
@@ -294,6 +297,11 @@ class ReducerCase:
     def rated_torque_Nm(self) -> float:
         return self.operation.rated_torque_Nm
 
+    @functools.cached_property
+    def si(self) -> CaseSI:
+        """The sizes in SI units (m, Pa), converted once (geometry.case_si)."""
+        return case_si(self)
+
     def with_errors(self, **changes: Any) -> "ReducerCase":
         """A copy with some error sources changed (validated like the case file)."""
         data = dataclasses.asdict(self.errors) | changes
@@ -553,25 +561,12 @@ def _check_undercut(case: ReducerCase) -> None:
 def load_case(path: str | Path) -> ReducerCase:
     """Read and validate a case file; raise CaseError naming key, value and allowed range."""
     path = Path(path)
+    text = read_text(path, what="case", error=CaseError, allowed="a case file is TOML text",
+                     max_bytes=CASE_FILE_MAX_BYTES,
+                     wording={"missing": "case file not found", "folder": "is a directory, not a case file",
+                              "not_utf8": "not a UTF-8 text file (byte {offset})"})
     try:
-        if path.is_dir():
-            raise CaseError(f"{path}: is a directory; expected a case file (TOML)")
-        if path.exists() and not path.is_file():
-            raise CaseError(f"{path}: not a regular file; expected a case file (TOML)")
-        if path.exists() and path.stat().st_size > CASE_FILE_MAX_BYTES:
-            raise CaseError(f"{path}: {path.stat().st_size} bytes; a case file is TOML text of at "
-                            f"most {CASE_FILE_MAX_BYTES} bytes")
-        text = path.read_bytes().decode("utf-8-sig")
         raw = tomllib.loads(text)
-    except FileNotFoundError:
-        raise CaseError(f"{path}: case file not found") from None
-    except PermissionError:
-        raise CaseError(f"{path}: cannot read the case file (permission denied)") from None
-    except OSError as exc:
-        raise CaseError(f"{path}: cannot read the case file ({exc.strerror or exc})") from None
-    except UnicodeDecodeError as exc:
-        raise CaseError(f"{path}: not a UTF-8 text file (byte {exc.start}); a case file is TOML "
-                        f"text") from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"{path}: not valid TOML ({' '.join(str(exc).split())})") from None
     return case_from_dict(raw, source=str(path))

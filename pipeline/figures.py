@@ -1,6 +1,6 @@
 """The engineer's pictures: pure functions of arrays -> one PNG each (matplotlib, off screen).
 
-The stages (cmd_dynamics) and the report (pipeline.report) draw through these, and the image tests
+The stages (cmd_dynamics, cmd_fourbar) and the report (pipeline.report) draw through these, and the image tests
 (tests/test_report.py) draw them from fixed arrays and compare with tests/reference_images/.
 Conventions: catalog axes (torque in % of rated, angle in arcmin), one colour per torque level and
 one panel per load form, characteristic orders labelled in staggered rows so labels never overlap.
@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dynamics.results import ARCSEC_PER_RAD
 from pipeline.render import figure, save_figure
 
 TORQUE_COLOURS = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02")
@@ -221,6 +222,59 @@ def load_sharing(path, pin_angle_deg: np.ndarray, pin_force_N: np.ndarray, cycle
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def budget_bars(path, budget: dict, title: str) -> None:
+    """Horizontal bars: % of the output compliance per component at the budget's torque, each
+    labelled with its equivalent stiffness (tangent rigidity / share: that part alone in series)."""
+    rig = budget["tangent_rigidity_Nm_per_arcmin"]
+    items = sorted(budget["compliance_budget"].items(), key=lambda kv: kv[1])
+    fig, ax = figure(figsize=(8, 0.45 * len(items) + 1.5))
+    y = np.arange(len(items))
+    ax.barh(y, [100 * v for _, v in items], color="tab:blue")
+    ax.set_yticks(y, [f"{k}  ({rig / v:,.0f} N m/arcmin)" if v > 0 else f"{k}  (rigid)" for k, v in items])
+    for yi, (_, v) in zip(y, items):
+        ax.text(100 * v, yi, f" {100 * v:.1f} %", va="center", fontsize=8)
+    ax.set_xlabel("share of the output torsional compliance [%]")
+    ax.set_xlim(0, 100 * max(v for _, v in items) * 1.2 + 1e-9)
+    ax.set_title(f"{title}: compliance budget at {budget['torque_Nm']:g} N m "
+                 f"(tangent rigidity {rig:.0f} N m/arcmin)", fontsize=10)
+    ax.grid(True, axis="x", lw=0.3)
+    save_figure(fig, path)
+
+
+def fourbar_sweeps(out, dev, singles, pairs, scan, labels: dict[str, str]) -> None:
+    """fourbar/: individual.png (each source swept alone, rigid and elastic), surface_<a>_<b>.png (pairs)
+    and crank_angle_scan.png (exact closure beside paper 000's quadratic); deviations in mm, errors in rad."""
+    A = ARCSEC_PER_RAD
+    fig, ax = figure(1, 2, figsize=(11, 4))
+    for s, sw in singles.items():
+        ax[0].plot(dev * 1e3, sw.rigid_rad * A, label=labels[s])
+        ax[1].plot(dev * 1e3, sw.elastic_rad * A, label=labels[s])
+    for a, t in zip(ax, ("rigid", "elastic")):
+        a.set_xlabel("deviation [um]"); a.set_ylabel("output-angle error [arcsec]"); a.set_title(t)
+        a.axhline(60, ls=":", c="gray"); a.axhline(-60, ls=":", c="gray"); a.grid(alpha=0.3)
+    ax[0].legend(fontsize=7)
+    save_figure(fig, out / "individual.png")
+    for (a, b), sw in pairs.items():
+        fig = figure(figsize=(11, 4.5))[0]
+        fig.clf()
+        X, Y = np.meshgrid(dev * 1e3, dev * 1e3, indexing="ij")
+        for k, (z, t) in enumerate(((sw.rigid_rad, "rigid"), (sw.elastic_rad, "elastic"))):
+            ax3 = fig.add_subplot(1, 2, k + 1, projection="3d")
+            ax3.plot_surface(X, Y, z * A, cmap="viridis")
+            ax3.set_xlabel(f"{a} [um]", fontsize=8); ax3.set_ylabel(f"{b} [um]", fontsize=8)
+            ax3.set_zlabel("error [arcsec]", fontsize=8); ax3.set_title(t)
+        save_figure(fig, out / f"surface_{a}_{b}.png")
+    fig, ax = figure(figsize=(7, 4))
+    for s, v in scan.items():
+        ax.plot(v["beta1_deg"], v["exact_rad"] * A, label=f"{s} exact")
+        ax.plot(v["beta1_deg"], v["quadratic_rad"] * A, "--", label=f"{s} quadratic")
+    ax.set_yscale("symlog", linthresh=1.0)
+    ax.set_xlabel("crank angle beta1 [deg]"); ax.set_ylabel("rigid output-angle error [arcsec]")
+    ax.set_title("exact closure vs paper's quadratic (+max deviation, no load)"); ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    save_figure(fig, out / "crank_angle_scan.png")
 
 
 def housing_section(path, points_m: np.ndarray, triangles: np.ndarray, displacement_m: np.ndarray,

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from dynamics.loads import FORMS
-from dynamics.matrix import PAPER_001_SIGMA_ARCSEC, TORQUES_NM
+from dynamics.matrix import paper001_sigma_arcsec
 
 LOST_MOTION_CATALOG_ARCMIN = 1.0     # Nabtesco RV-E / RV-N catalogs: backlash and lost motion <= 1 arcmin
 # Nabtesco RV-E catalog, RV-40E: rated torque 412 N m, torsional rigidity 108 N m/arcmin
@@ -39,13 +39,13 @@ def read_json(path: Path) -> dict | None:
 
 
 def read_sigma(path: Path) -> dict | None:
-    """te_std.csv -> {(torque, form): sigma}."""
+    """te_std.csv -> {(torque, form): sigma}, the load forms (by name) in the file's column order."""
     try:
         with path.open() as fh:
             rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
     except OSError:
         return None
-    return {(float(r["torque_Nm"]), f): float(r[f]) for r in rows for f in FORMS if f in r}
+    return {(float(r["torque_Nm"]), f): float(r[f]) for r in rows for f in r if f in FORMS}
 
 
 def _f(v, fmt=".3g", unit="", missing="not built") -> str:
@@ -115,12 +115,13 @@ def key_figures(case_dir: Path, rated_Nm: float | None, ratio: float | None) -> 
                         f"largest pin carries {100 * ls.get('max_pin_share_of_disc_load', 0):.1f} % of its disc's load"))
     if sig:
         top = max(T for T, _ in sig)
-        vals = " / ".join(f"{sig.get((top, f), float('nan')):.3g}" for f in FORMS)
+        forms = list(dict.fromkeys(f for _, f in sig))
+        vals = " / ".join(f"{sig.get((top, f), float('nan')):.3g}" for f in forms)
         ref = "-"
-        if ratio == PAPER_001_RATIO and cat and top in TORQUES_NM:
-            i = TORQUES_NM.index(top)
-            ref = "paper 001: " + " / ".join(f"{PAPER_001_SIGMA_ARCSEC[i, j]:.2f}" for j in range(len(FORMS)))
-        rows.append(Row(f"sigma of TE at {top:g} N m, {' / '.join(FORMS)} (t >= 2 s)", vals + " arcsec", ref,
+        paper = [paper001_sigma_arcsec(f, top) for f in forms]
+        if ratio == PAPER_001_RATIO and cat and any(v is not None for v in paper):
+            ref = "paper 001: " + " / ".join("no paper figure" if v is None else f"{v:.2f}" for v in paper)
+        rows.append(Row(f"sigma of TE at {top:g} N m, {' / '.join(forms)} (t >= 2 s)", vals + " arcsec", ref,
                         "matrix/te_std.csv",
                         "ours is the elastic TE alone; paper 001's level must hold a no-load kinematic error of "
                         "a geometry it does not publish: compare trends" if ref != "-" else ""))

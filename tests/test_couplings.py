@@ -13,7 +13,8 @@ from dynamics import couplings
 from dynamics.couplings import REGISTRY, base
 from dynamics.layout import DofLayout
 from dynamics.loads import LoadSpec, input_angle_deg, input_speed_deg_s, load_torque_Nm
-from dynamics.model import evaluate, run_dynamics, simulate, solve_static
+from dynamics.model import evaluate, run_dynamics, simulate
+from dynamics.statics import solve_static
 from support import model_for_tests
 
 NAMES = [m.NAME for m in REGISTRY]

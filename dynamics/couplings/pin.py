@@ -59,24 +59,22 @@ class Params(NamedTuple):
 
 
 def params(case, stiffness, layout, slots) -> Params:
-    cy, mod, er = case.cycloid, case.modification, case.errors
+    cy, mod, er, si = case.cycloid, case.modification, case.errors, case.si
     zp, nd = cy.zp, cy.disc_count
     th = 2 * np.pi * np.arange(zp) / zp
     each = lambda v: np.asarray(v, float) * 1e-6 if len(v) else np.zeros(zp)  # noqa: E731
-    Rp = cy.pin_circle_radius_mm * 1e-3 + er.pin_circle_radius_um * 1e-6 + each(er.per_pin_radial_um) \
+    Rp = si.pin_circle_radius_m + er.pin_circle_radius_um * 1e-6 + each(er.per_pin_radial_um) \
         + 1e-6 * lobe_sum(er.pin_radial_lobes, 0, th)
     tp = each(er.per_pin_tangential_um)
-    rp = cy.pin_radius_mm * 1e-3 + er.pin_radius_um * 1e-6 + each(er.per_pin_radius_um)
+    rp = si.pin_radius_m + er.pin_radius_um * 1e-6 + each(er.per_pin_radius_um)
     factor = 1.0 + np.zeros(zp) + lobe_sum(er.pin_stiffness_lobes, 0, th)
-    R_disc = cy.pin_circle_radius_mm * 1e-3      # pitch errors are tangential at the pin circle
+    R_disc = si.pin_circle_radius_m      # pitch errors are tangential at the pin circle
     pos, k_law, n_law, _ = pin_law(stiffness)
     disc = layout["disc"]
     hm = housing_modes(stiffness, layout)
     phi = np.zeros((zp, 2, 0)) if hm is None else np.asarray(hm[0].phi, float).reshape(zp, 2, -1)
     return Params(
-        R_m=(cy.pin_circle_radius_mm + mod.offset_mm) * 1e-3,
-        Rr_m=(cy.pin_radius_mm + mod.equidistant_mm) * 1e-3,
-        E_m=cy.eccentricity_mm * 1e-3, zp=float(zp),
+        R_m=si.modified_pin_circle_radius_m, Rr_m=si.modified_pin_radius_m, E_m=si.eccentricity_m, zp=float(zp),
         pins=np.column_stack([Rp * np.cos(th) - tp * np.sin(th), Rp * np.sin(th) + tp * np.cos(th), rp, th,
                               factor]),
         law=np.column_stack([pos, k_law, n_law]).astype(float),

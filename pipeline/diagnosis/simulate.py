@@ -39,7 +39,8 @@ def quasi_static_te(case, stiffness, input_angle_deg: np.ndarray, torque_Nm,
     torque_Nm is the record's (signed, + resists forward rotation); quasi_static applies
     direction * its argument, so it gets direction * torque_Nm (= |T| for a steady record).
     Models are cached per (case, stiffness object): a diagnosis re-simulates the same few."""
-    from dynamics.model import build_model, quasi_static
+    from dynamics.model import build_model
+    from dynamics.statics import quasi_static
     key = (case, id(stiffness))
     entry = _MODELS.get(key)
     if entry is None:
