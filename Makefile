@@ -154,8 +154,11 @@ $(BUILD)/%/report/index.html: $(CASE_FP) $$(addprefix $(BUILD)/%/,$(STAGES)) \
         $$(if $$(filter rv40e-81,$$*),$(BUILD)/%/diagnosis/paper001.json) $(SRC_report) | $(STAMP)
 	$(RUN) report --case $(CASE_FILE_$*) --build $(BUILD) $(Q)
 
+# the suite on TEST_WORKERS processes (pytest-xdist; default one per core), a test module per worker
+# (its module-scoped fixtures computed once); the kernels compile once for all (dynamics.kernel_cache)
+TEST_WORKERS ?= auto
 test: $(STAMP)
-	$(PY) -m pytest -q -p no:cacheprovider
+	$(PY) -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadscope
 
 bench: $(STAMP)
 	$(PY) bench/run_all.py --out $(BUILD)/bench.json
