@@ -154,8 +154,12 @@ $(BUILD)/%/report/index.html: $(CASE_FP) $$(addprefix $(BUILD)/%/,$(STAGES)) \
         $$(if $$(filter rv40e-81,$$*),$(BUILD)/%/diagnosis/paper001.json) $(SRC_report) | $(STAMP)
 	$(RUN) report --case $(CASE_FILE_$*) --build $(BUILD) $(Q)
 
+# the suite on TEST_WORKERS processes (pytest-xdist; default one per core): each worker takes a run
+# of consecutive tests and an idle one steals half of another's rest, so a module's fixtures are made
+# about once; the kernels compile once for all workers (dynamics.kernel_cache)
+TEST_WORKERS ?= auto
 test: $(STAMP)
-	$(PY) -m pytest -q -p no:cacheprovider
+	$(PY) -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist worksteal
 
 bench: $(STAMP)
 	$(PY) bench/run_all.py --out $(BUILD)/bench.json
