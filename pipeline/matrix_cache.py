@@ -115,7 +115,8 @@ def run_matrix(case_path: str, stiffness_path: str, duration_s: float, out_dir: 
     runner(run_case, tasks). Returns (summaries, number reused)."""
     cells = [(case_path, stiffness_path, form, T, duration_s, out_dir, dt_s) for T in TORQUES_NM for form in forms]
     results = [finished_cell(out_dir, c[2], c[3], cell_fingerprint(*c[:5], dt_s)) for c in cells]
-    todo = [i for i, r in enumerate(results) if r is None]
+    # highest torque first (more contacts, more Newton iterations): the pool ends on the short cells
+    todo = sorted((i for i, r in enumerate(results) if r is None), key=lambda i: (-cells[i][3], i))
     for i, r in zip(todo, runner(run_case, [cells[i] for i in todo]) if todo else []):
         results[i] = r
     return results, len(cells) - len(todo)
