@@ -24,6 +24,7 @@ import numpy as np
 
 from geometry import spur
 from geometry.artifacts import InputError
+from geometry.lubrication import Lubrication
 from geometry.pin_profile import min_convex_radius_mm
 
 # Largest pin count accepted. Real cycloid reducers stay below it: RV reducers carry ~40 pins and
@@ -264,9 +265,9 @@ class Tolerances:
 SECTIONS: dict[str, type] = {
     "cycloid": Cycloid, "modification": Modification, "stage1": Stage1, "carrier": Carrier,
     "disc": Disc, "crankshaft": Crankshaft, "material": Material, "operation": Operation,
-    "dynamics": Dynamics, "errors": Errors, "tolerances": Tolerances,
+    "dynamics": Dynamics, "errors": Errors, "tolerances": Tolerances, "lubrication": Lubrication,
 }
-OPTIONAL_SECTIONS = ("errors", "tolerances")
+OPTIONAL_SECTIONS = ("errors", "tolerances", "lubrication")
 
 
 @dataclass(frozen=True)
@@ -283,6 +284,7 @@ class ReducerCase:
     dynamics: Dynamics
     errors: Errors = Errors()
     tolerances: Tolerances = Tolerances()
+    lubrication: Lubrication = Lubrication()   # read by dynamics.losses only: not fingerprinted
     source: str = ""   # path the case was read from, for messages
 
     @property
@@ -311,8 +313,10 @@ class ReducerCase:
         return out
 
     def to_dict(self) -> dict:
-        """The content the case fingerprint hashes: every section but `tolerances` (see Tolerances)."""
-        return {k: v for k, v in dataclasses.asdict(self).items() if k not in ("source", "tolerances")}
+        """The content the case fingerprint hashes: every section but `tolerances` (see Tolerances)
+        and `lubrication` (read by the operating map only, recorded in its artifacts)."""
+        skip = ("source", "tolerances", "lubrication")
+        return {k: v for k, v in dataclasses.asdict(self).items() if k not in skip}
 
 
 def _where(section: str, key: str, source: str) -> str:

@@ -1,0 +1,194 @@
+"""The operating point: TE, efficiency and torques of the running reducer with friction.
+
+Per condition (input speed, output torque, oil temperature) and direction (the load resists the
+motion in both: power flows from input to output either way), at input angles over one output
+revolution:
+  1. the frictionless static state (dynamics.statics.solve_static) under the load plus the carrier's
+     drag (main bearings + output seal, dynamics.losses.contacts): the drag closes the free play on
+     the loaded flank at zero load, so the no-load loss acts through the low-torque (clearance,
+     Hertzian) part of the wind-up;
+  2. the friction forces and moments of every contact (dynamics.losses.contacts: directions from the
+     running kinematics, magnitudes from the contact loads and the mixed-friction coefficient) added
+     as loads, and the statics re-solved by Newton on the model's tangent with the contact normal
+     forces (hence the friction) recomputed at each iterate, to FRICTION_TOL;
+  3. TE = the output encoder's reading - input / i (bench convention), its mean and peak-to-peak per
+     direction; efficiency = P_out / (P_out + P_loss) and input torque = (P_out + P_loss) / omega_in,
+     forward, averaged over the revolution (power-weighted).
+The stiffness is the model's (dynamics.reducer.build_model from fem.stiffness): a softer or stiffer
+stiffness model changes every figure here with no edit. Starting torque: zero speed, no load, every
+sliding contact at boundary friction (Lambda = 0) and the bearings at Palmgren's slow-running moment.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dynamics.losses.contacts import RPM_PER_RAD_S, contact_friction, rates
+from dynamics.losses.lubricant import Lubricant
+from dynamics.reducer import DynamicsError, ReducerModel, evaluate
+from dynamics.results import ARCSEC_PER_RAD
+from dynamics.statics import nominal_q, solve_static
+
+FRICTION_TOL_RAD = 2.5e-8      # Newton on the friction loads: output-angle step below 0.005 arcsec
+FRICTION_MAX_ITER = 8
+POINTS_PER_REV = 24            # input angles per output revolution (mean and p-p of TE)
+
+
+@dataclass(frozen=True)
+class DirectionRun:
+    """One direction of one condition, per sampled input angle."""
+    direction: int
+    input_angle_deg: np.ndarray
+    te_arcsec: np.ndarray
+    te_frictionless_arcsec: np.ndarray
+    output_power_W: np.ndarray
+    loss_W: dict                   # contact set -> (n,) power loss
+    pin_mu: np.ndarray             # (n,) mean friction coefficient of the loaded pins
+    pin_film_parameter: np.ndarray  # (n,) mean Lambda of the loaded pins
+    carrier_drag_Nm: float
+    newton_iterations: int
+
+    @property
+    def total_loss_W(self) -> np.ndarray:
+        return np.sum(list(self.loss_W.values()), axis=0)
+
+    @property
+    def efficiency(self) -> float | None:
+        out = float(np.sum(self.output_power_W))
+        return out / (out + float(np.sum(self.total_loss_W))) if out > 0 else None
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    input_speed_rpm: float
+    torque_Nm: float
+    oil_temperature_C: float
+    forward: DirectionRun
+    backward: DirectionRun
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def gap_arcsec(self) -> float:
+        return float(np.mean(self.forward.te_arcsec) - np.mean(self.backward.te_arcsec))
+
+    @property
+    def gap_frictionless_arcsec(self) -> float:
+        return float(np.mean(self.forward.te_frictionless_arcsec) - np.mean(self.backward.te_frictionless_arcsec))
+
+    @property
+    def input_torque_Nm(self) -> float:
+        """Forward input torque: (P_out + P_loss) / omega_in, revolution mean."""
+        om = self.input_speed_rpm / RPM_PER_RAD_S
+        return float(np.mean(self.forward.output_power_W + self.forward.total_loss_W)) / om if om else math.nan
+
+    def row(self) -> dict:
+        """The `conditions.csv` columns (DESIGN.md), efficiency empty (None) at zero torque."""
+        fw, bw = self.forward.te_arcsec, self.backward.te_arcsec
+        return {"te_mean_fw_arcsec": float(np.mean(fw)), "te_mean_bw_arcsec": float(np.mean(bw)),
+                "gap_fw_minus_bw_arcsec": self.gap_arcsec, "te_pp_fw_arcsec": float(np.ptp(fw)),
+                "te_pp_bw_arcsec": float(np.ptp(bw)), "efficiency": self.forward.efficiency,
+                "input_torque_Nm": self.input_torque_Nm}
+
+    def summary(self) -> dict:
+        f = self.forward
+        return {**self.row(), "gap_frictionless_arcsec": self.gap_frictionless_arcsec,
+                "pin_friction_mean": float(np.mean(f.pin_mu)) if len(f.pin_mu) else None,
+                "pin_film_parameter_mean": float(np.mean(f.pin_film_parameter)) if len(f.pin_mu) else None,
+                "carrier_drag_Nm": f.carrier_drag_Nm,
+                "loss_share": {k: float(np.sum(v)) / max(float(np.sum(f.total_loss_W)), 1e-300)
+                               for k, v in f.loss_W.items()}}
+
+
+def _output_angle_rad(model: ReducerModel, q: np.ndarray) -> float:
+    return float(model.measured_output_rad(q[model.i_out]))
+
+
+def friction_equilibrium(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_rad: float, torque: float,
+                         qdot: np.ndarray, oil_temperature_C: float, input_speed_rad_s: float,
+                         shape: np.ndarray | None = None):
+    """Static equilibrium under `torque` at the output (record convention, applied) plus the contact
+    friction of a motion qdot: Newton on the tangent from the frictionless state q, the friction
+    recomputed from the normal forces at every iterate. Returns (q, friction of the last iterate, its)."""
+    io = model.i_out
+    fr = None
+    for it in range(1, FRICTION_MAX_ITER + 1):
+        fr = contact_friction(model, lub, q, input_rad, qdot, oil_temperature_C, input_speed_rad_s, shape)
+        w, _ = evaluate(model, q, input_rad, want_k=True)
+        res = w.f + fr.force
+        res[io] -= torque
+        try:
+            dq = np.linalg.solve(0.5 * (w.K + w.K.T), res)
+        except np.linalg.LinAlgError:
+            raise DynamicsError(f"friction statics: singular tangent at input {math.degrees(input_rad):.6g} deg, "
+                                f"torque {torque:.4g} N m") from None
+        q = q + dq
+        if abs(dq[io]) < FRICTION_TOL_RAD:
+            return q, fr, it
+    raise DynamicsError(f"friction statics did not converge at input {math.degrees(input_rad):.6g} deg, "
+                        f"torque {torque:.4g} N m (output step {abs(dq[io]) * ARCSEC_PER_RAD:.3g} arcsec "
+                        f"after {FRICTION_MAX_ITER} iterations)")
+
+
+def run_direction(model: ReducerModel, lub: Lubricant, input_speed_rpm: float, torque_Nm: float,
+                  oil_temperature_C: float, direction: int, input_angle_deg: np.ndarray,
+                  friction: bool = True) -> DirectionRun:
+    om_in = direction * input_speed_rpm / RPM_PER_RAD_S
+    io = model.i_out
+    te, te0, pout, mu, lam = [], [], [], [], []
+    losses: dict[str, list] = {}
+    q, drag, iters = None, None, 0
+    for th_deg in input_angle_deg:
+        th = math.radians(th_deg)
+        qdot = rates(model, th) * om_in
+        if drag is None:       # the carrier's drag depends on speed and temperature only
+            st = solve_static(model, th_deg, direction * torque_Nm, None, direction)
+            drag = contact_friction(model, lub, st.q, th, qdot, oil_temperature_C, om_in).carrier_drag_Nm \
+                if friction else 0.0
+        T = direction * (torque_Nm + drag)
+        guess = None if q is None else q + nominal_q(model, th) - nominal_q(model, th_prev)
+        st = solve_static(model, th_deg, T, guess, direction)
+        th_prev = th
+        q = st.q
+        te0.append(st.te_arcsec)
+        if friction:
+            qf, fr, it = friction_equilibrium(model, lub, q, th, T, qdot, oil_temperature_C, om_in)
+            iters += it
+            for k, v in fr.power_W.items():
+                losses.setdefault(k, []).append(v)
+            mu.append(float(np.mean(fr.pin_mu)) if len(fr.pin_mu) else math.nan)
+            lam.append(float(np.mean(fr.pin_film_parameter)) if len(fr.pin_mu) else math.nan)
+        else:
+            qf = q
+        te.append((_output_angle_rad(model, qf) - th / model.ratio) * ARCSEC_PER_RAD)
+        pout.append(torque_Nm * abs(qdot[io]))
+    return DirectionRun(direction=direction, input_angle_deg=np.asarray(input_angle_deg, float),
+                        te_arcsec=np.array(te), te_frictionless_arcsec=np.array(te0),
+                        output_power_W=np.array(pout), loss_W={k: np.array(v) for k, v in losses.items()},
+                        pin_mu=np.array(mu), pin_film_parameter=np.array(lam), carrier_drag_Nm=float(drag),
+                        newton_iterations=iters)
+
+
+def revolution_angles_deg(model: ReducerModel, points_per_rev: int = POINTS_PER_REV) -> np.ndarray:
+    """Input angles over one output revolution, offset half a step from zero."""
+    n = int(points_per_rev)
+    return 360.0 * model.ratio * (np.arange(n) + 0.5) / n
+
+
+def operating_point(model: ReducerModel, lub: Lubricant, input_speed_rpm: float, torque_Nm: float,
+                    oil_temperature_C: float, *, points_per_rev: int = POINTS_PER_REV,
+                    friction: bool = True) -> OperatingPoint:
+    """TE in each direction, gap, efficiency and input torque at one condition (see module doc).
+    torque_Nm >= 0 is the load's magnitude (resisting the motion in both directions)."""
+    if not (math.isfinite(input_speed_rpm) and input_speed_rpm > 0):
+        raise DynamicsError(f"input speed = {input_speed_rpm!r} rpm: must be finite and > 0")
+    if not (math.isfinite(torque_Nm) and torque_Nm >= 0):
+        raise DynamicsError(f"torque = {torque_Nm!r} N m: must be finite and >= 0 (the load's magnitude)")
+    lub.check_temperature(oil_temperature_C)
+    ang = revolution_angles_deg(model, points_per_rev)
+    runs = [run_direction(model, lub, input_speed_rpm, torque_Nm, oil_temperature_C, s, ang, friction)
+            for s in (1, -1)]
+    return OperatingPoint(input_speed_rpm=float(input_speed_rpm), torque_Nm=float(torque_Nm),
+                          oil_temperature_C=float(oil_temperature_C), forward=runs[0], backward=runs[1],
+                          meta={"points_per_rev": int(points_per_rev), "friction": bool(friction)})
