@@ -10,7 +10,8 @@ magnitude, resisting the motion in both directions); an oil temperature outside 
 stated range; no rows; more than MAX_ROWS rows (each row is two static sweeps of one output
 revolution, ~1-2 s of one core: 10^4 rows is ~3 h on 2 cores; split a larger map).
 Output DIR/conditions.csv: each input row with RESULT_COLUMNS appended (TE in the bench convention,
-efficiency forward, empty at zero torque).
+efficiency forward, empty at zero torque); an input column named like an output column (a measured
+map) is kept beside the prediction as measured_<name>.
 """
 from __future__ import annotations
 
@@ -94,9 +95,10 @@ def read_table(path: str | Path, temperature_range_C: tuple[float, float]) -> Co
     if missing:
         raise ConditionsError(f"{name}: column {missing[0]!r} missing from the header {','.join(header)!r}; "
                               f"required: {', '.join(REQUIRED)}")
-    clash = [c for c in RESULT_COLUMNS if c in header]
+    clash = [c for c in RESULT_COLUMNS if f"measured_{c}" in header and c in header]
     if clash:
-        raise ConditionsError(f"{name}: column {clash[0]!r} is an output column; rename or drop it")
+        raise ConditionsError(f"{name}: columns {clash[0]!r} and 'measured_{clash[0]}' both present: the "
+                              f"first would be kept as the second beside the prediction; drop one")
     n = len(parsed) - 1
     if n == 0:
         raise ConditionsError(f"{name}: no condition rows after the header")
@@ -134,6 +136,11 @@ def check_torques(table: ConditionsTable, momentary_torque_Nm: float) -> None:
                                   f"0 to {momentary_torque_Nm:g} (the case's momentary torque)")
 
 
+def measured_name(column: str) -> str:
+    """An input column's name in the output: measured_<name> where it would clash with a result."""
+    return f"measured_{column}" if column in RESULT_COLUMNS else column
+
+
 def _cell(v) -> str:
     return "" if v is None or (isinstance(v, float) and not math.isfinite(v)) else f"{v:.6g}"
 
@@ -142,7 +149,7 @@ def table_text(table: ConditionsTable, results: list[dict]) -> str:
     """conditions.csv: every input column, then RESULT_COLUMNS (efficiency empty at zero torque)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(list(table.header) + list(RESULT_COLUMNS))
+    w.writerow([measured_name(h) for h in table.header] + list(RESULT_COLUMNS))
     for row, res in zip(table.rows, results):
         eff = res["efficiency"] if row.torque_Nm > 0 else None
         w.writerow(list(row.fields) + [_cell(eff if c == "efficiency" else res[c]) for c in RESULT_COLUMNS])

@@ -101,10 +101,11 @@ def mesh_loss_factor(case) -> float:
 
 def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_rad: float,
                      qdot: np.ndarray, oil_temperature_C: float, input_speed_rad_s: float | None = None,
-                     shape: np.ndarray | None = None) -> ContactFriction:
+                     shape: np.ndarray | None = None, viscous: bool = True) -> ContactFriction:
     """Friction of state q moving at qdot [rad/s, m/s] (running: `rates` x omega_in). shape: the
     motion's direction in q along which the contact normals turn (default qdot); the input turns at
-    input_speed_rad_s (default qdot's kinematic input speed: carrier rate x i)."""
+    input_speed_rad_s (default qdot's kinematic input speed: carrier rate x i). viscous False drops
+    the bearings' no-load (viscous) moments M0: a reducer at rest or creeping (catalog test)."""
     case, lay, sec = model.case, model.layout, lub.section
     w, _ = evaluate(model, q, input_rad)
     dq = np.asarray(qdot, float)
@@ -167,7 +168,7 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
             ic, idd = rot.index(j), disc.index(d, "rot")
             om = dq[ic] - dq[idd]
             n_rpm = abs(om) * RPM_PER_RAD_S
-            M = brg.palmgren_no_load_Nm(sec.f0_needle, nu_cSt, n_rpm, dm_needle) \
+            M = viscous * brg.palmgren_no_load_Nm(sec.f0_needle, nu_cSt, n_rpm, dm_needle) \
                 + float(brg.palmgren_load_Nm(sec.f1_needle, np.hypot(*Fn[d, j]), dm_needle))
             s = math.copysign(1.0, om) if om else 0.0
             f[ic] -= s * M
@@ -187,7 +188,7 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
         n_rpm = abs(om) * RPM_PER_RAD_S
         Fr = 0.5 * float(np.sum(np.hypot(Fs[j, :, 0], Fs[j, :, 1])))   # per bearing, mean of the planes
         P1 = max(Fr, 2 * Y * sb.preload_N)
-        M = 2 * (brg.palmgren_no_load_Nm(sec.f0_tapered, nu_cSt, n_rpm, dm_sup)
+        M = 2 * (viscous * brg.palmgren_no_load_Nm(sec.f0_tapered, nu_cSt, n_rpm, dm_sup)
                  + float(brg.palmgren_load_Nm(sec.f1_tapered, P1, dm_sup)))
         s = math.copysign(1.0, om) if om else 0.0
         f[ic] -= s * M
@@ -213,7 +214,7 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
     # the load torque, so the robust static solver closes the free play with it)
     om_out = dq[io]
     n_out = abs(om_out) * RPM_PER_RAD_S
-    M_main = 2 * brg.palmgren_no_load_Nm(sec.f0_main, nu_cSt, n_out, sec.main_bearing_pitch_diameter_mm)
+    M_main = 2 * viscous * brg.palmgren_no_load_Nm(sec.f0_main, nu_cSt, n_out, sec.main_bearing_pitch_diameter_mm)
     M_seal_out = brg.seal_moment_Nm(sec.output_seal_diameter_mm)
     power["main_bearings"] = M_main * abs(om_out)
     power["seals"] = M_seal_out * abs(om_out) + brg.seal_moment_Nm(sec.input_seal_diameter_mm) * abs(om_in)

@@ -107,14 +107,14 @@ def _output_angle_rad(model: ReducerModel, q: np.ndarray) -> float:
 
 def friction_equilibrium(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_rad: float, torque: float,
                          qdot: np.ndarray, oil_temperature_C: float, input_speed_rad_s: float,
-                         shape: np.ndarray | None = None):
+                         shape: np.ndarray | None = None, viscous: bool = True):
     """Static equilibrium under `torque` at the output (record convention, applied) plus the contact
     friction of a motion qdot: Newton on the tangent from the frictionless state q, the friction
     recomputed from the normal forces at every iterate. Returns (q, friction of the last iterate, its)."""
     io = model.i_out
     fr = None
     for it in range(1, FRICTION_MAX_ITER + 1):
-        fr = contact_friction(model, lub, q, input_rad, qdot, oil_temperature_C, input_speed_rad_s, shape)
+        fr = contact_friction(model, lub, q, input_rad, qdot, oil_temperature_C, input_speed_rad_s, shape, viscous)
         w, _ = evaluate(model, q, input_rad, want_k=True)
         res = w.f + fr.force
         res[io] -= torque
@@ -192,3 +192,95 @@ def operating_point(model: ReducerModel, lub: Lubricant, input_speed_rpm: float,
     return OperatingPoint(input_speed_rpm=float(input_speed_rpm), torque_Nm=float(torque_Nm),
                           oil_temperature_C=float(oil_temperature_C), forward=runs[0], backward=runs[1],
                           meta={"points_per_rev": int(points_per_rev), "friction": bool(friction)})
+
+
+CREEP_RAD_S = 1e-9      # input speed of a start or a catalog sweep: no film (Lambda -> 0), no viscous drag
+
+
+def starting_torque_Nm(model: ReducerModel, lub: Lubricant, oil_temperature_C: float,
+                       input_angle_deg: float = 0.0) -> float:
+    """Input torque that starts the unloaded reducer: every sliding contact at boundary friction
+    (no film at zero speed), the bearings' load moments (preload) and the seals, no viscous drag:
+    sum of the loss moments times their speed ratio to the input."""
+    th = math.radians(input_angle_deg)
+    st = solve_static(model, input_angle_deg, 0.0, None, +1)
+    fr = contact_friction(model, lub, st.q, th, rates(model, th) * CREEP_RAD_S, oil_temperature_C,
+                          CREEP_RAD_S, viscous=False)
+    return (fr.total_power_W + fr.carrier_drag_Nm * CREEP_RAD_S / model.ratio) / CREEP_RAD_S
+
+
+@dataclass(frozen=True)
+class FrictionLoop:
+    """The catalog loop (input locked, output torque swept 0 -> +rated -> -rated -> +rated) with the
+    contact friction opposing the creep of every contact (boundary friction: no film at rest)."""
+    torque_Nm: np.ndarray
+    output_angle_arcmin: np.ndarray              # with friction
+    output_angle_frictionless_arcmin: np.ndarray
+    rated_torque_Nm: float
+    width_at_zero_arcmin: float                  # falling minus rising branch at zero torque
+    width_frictionless_at_zero_arcmin: float
+    max_width_arcmin: float                      # widest gap between the branches over the sweep
+    torsional_rigidity_Nm_per_arcmin: float      # slope 50-100 % rated (catalog b / a), with friction
+    torsional_rigidity_secant_Nm_per_arcmin: float
+
+
+def _branch_width(T, ang, rated):
+    """(width at zero, widest) of the loop: the falling branch (from +rated) at its last point on the
+    positive side of zero minus the rising branch (from -rated) at its last negative point, and the
+    largest difference of the two branches at matched torques beyond +-5 % rated (friction alone)."""
+    dT = np.diff(T, prepend=T[0])
+    half = np.arange(len(T)) >= len(T) // 5           # past the first loading leg
+    dn, up = half & (dT < 0), half & (dT > 0)
+    i_dn = np.flatnonzero(dn & (T > 0))[-1]
+    i_up = np.flatnonzero(up & (T < 0))[-1]
+    grid = np.concatenate([np.linspace(-0.9, -0.05, 18), np.linspace(0.05, 0.9, 18)]) * rated   # off the free play
+    iu, idn = np.argsort(T[up]), np.argsort(T[dn])
+    w = np.interp(grid, T[dn][idn], ang[dn][idn]) - np.interp(grid, T[up][iu], ang[up][iu])
+    return float(abs(ang[i_dn] - ang[i_up])), float(np.max(np.abs(w)))
+
+
+def friction_loop(model: ReducerModel, lub: Lubricant, oil_temperature_C: float, points_per_quarter: int = 11,
+                  input_angle_deg: float = 0.0) -> FrictionLoop:
+    from dynamics.catalog import rigidity_readings, sweep_torques
+    rated = model.case.rated_torque_Nm
+    T = sweep_torques(rated, points_per_quarter)
+    th = math.radians(input_angle_deg)
+    qs, q = [], None
+    for t in T:
+        q = solve_static(model, input_angle_deg, t, q, +1 if t >= 0 else -1).q
+        qs.append(q)
+    qs = np.array(qs)
+    io = model.i_out
+    a0 = np.array([_output_angle_rad(model, q) for q in qs]) * ARCSEC_PER_RAD / 60
+    a1 = [a0[0]]
+    for k in range(1, len(T)):
+        # Coulomb: the output moves only where the load overcomes the friction, and then only in the
+        # sweep's sense; where the friction statics has no solution on the loaded flank, or one
+        # behind the last point, the output sticks there (the loop's flat, friction-held parts)
+        sense = np.sign(a0[k] - a0[k - 1])
+        shape = (qs[k] - qs[k - 1]) * np.sign(T[k] - T[k - 1])
+        qdot = shape / max(abs(shape[io]), 1e-30) * CREEP_RAD_S / model.ratio
+        try:
+            qf, _, _ = friction_equilibrium(model, lub, qs[k], th, T[k], qdot, oil_temperature_C, 0.0, shape,
+                                            viscous=False)
+            a = _output_angle_rad(model, qf) * ARCSEC_PER_RAD / 60
+        except DynamicsError:
+            a = a1[-1]
+        a1.append(a if (a - a1[-1]) * sense >= 0 else a1[-1])
+    a1 = np.array(a1)
+    w1, m1 = _branch_width(T, a1, rated)
+    w0, _ = _branch_width(T, a0, rated)
+    slope, secant = rigidity_readings(-T, a1, rated)
+    return FrictionLoop(torque_Nm=T, output_angle_arcmin=a1, output_angle_frictionless_arcmin=a0,
+                        rated_torque_Nm=rated, width_at_zero_arcmin=w1, width_frictionless_at_zero_arcmin=w0,
+                        max_width_arcmin=m1, torsional_rigidity_Nm_per_arcmin=slope,
+                        torsional_rigidity_secant_Nm_per_arcmin=secant)
+
+
+def forward_efficiency(model: ReducerModel, lub: Lubricant, input_speed_rpm: float, torque_Nm: float,
+                       oil_temperature_C: float, points_per_rev: int = 6) -> float | None:
+    """Forward efficiency alone (the catalog's efficiency chart): fewer angles, no backward run."""
+    lub.check_temperature(oil_temperature_C)
+    run = run_direction(model, lub, input_speed_rpm, torque_Nm, oil_temperature_C, +1,
+                        revolution_angles_deg(model, points_per_rev))
+    return run.efficiency
