@@ -26,6 +26,7 @@ ROWS_PER_TASK = 4
 CHART_OUTPUT_RPM = (2.0, 5.0, 10.0, 15.0, 20.0, 30.0, 40.0)
 CHART_TORQUE_PCT = (25.0, 50.0, 100.0)
 CHART_TEMPERATURE_C = (25.0, 40.0, 60.0)
+CHART_POINTS_PER_REV = 4     # efficiency alone: a revolution mean of the power, not a TE curve
 # Nabtesco RV-N catalogue, efficiency chart: ~80-85 % at rated torque, 15 rpm output, case 30 C
 # (grease); read as a band, the catalogue prints a curve, not a number
 PUBLISHED_EFFICIENCY = {"value": 0.82, "band": [0.80, 0.85],
@@ -52,6 +53,16 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+def _task(kind, *args):
+    """Pure task of the pool: one of the row chunks, no-load points, chart temperatures, case figures."""
+    return {"rows": _rows_task, "noload": _no_load_task, "chart": _efficiency_task, "case": _case_task}[kind](*args)
+
+
+def _case_task(case, stiffness):
+    from dynamics.losses import Lubricant
+    return _case_figures(case, stiffness, Lubricant.from_section(case.lubrication))
+
+
 def _rows_task(case, stiffness, rows, points_per_rev):
     """Pure task: operating points of a few (speed, torque, temperature) rows."""
     from dynamics.losses import Lubricant, operating_point
@@ -66,11 +77,15 @@ def _rows_task(case, stiffness, rows, points_per_rev):
 
 
 def _no_load_task(case, stiffness, speed, temp, points_per_rev):
-    from dynamics.losses import Lubricant, operating_point
+    """No-load running torque at the input: the loss power over the input speed, forward."""
+    from dynamics.losses import Lubricant
+    from dynamics.losses.contacts import RPM_PER_RAD_S
+    from dynamics.losses.operating import revolution_angles_deg, run_direction
     from dynamics.reducer import build_model
-    op = operating_point(build_model(case, stiffness), Lubricant.from_section(case.lubrication), speed, 0.0,
-                         temp, points_per_rev=points_per_rev)
-    return op.input_torque_Nm
+    model = build_model(case, stiffness)
+    run = run_direction(model, Lubricant.from_section(case.lubrication), speed, 0.0, temp, +1,
+                        revolution_angles_deg(model, min(points_per_rev, CHART_POINTS_PER_REV)))
+    return float(np.mean(run.total_loss_W)) / (speed / RPM_PER_RAD_S)
 
 
 def _efficiency_task(case, stiffness, temp):
@@ -78,7 +93,7 @@ def _efficiency_task(case, stiffness, temp):
     from dynamics.losses.operating import forward_efficiency
     from dynamics.reducer import build_model
     model, lub = build_model(case, stiffness), Lubricant.from_section(case.lubrication)
-    return [[forward_efficiency(model, lub, n * case.ratio, q / 100 * case.rated_torque_Nm, temp)
+    return [[forward_efficiency(model, lub, n * case.ratio, q / 100 * case.rated_torque_Nm, temp, CHART_POINTS_PER_REV)
              for n in CHART_OUTPUT_RPM] for q in CHART_TORQUE_PCT]
 
 
@@ -140,20 +155,21 @@ def run(args) -> int:
             raise ConditionsCommandError(f"--diagnosis {args.diagnosis}: {exc}") from None
         causes = sorted(mp)
     rows = [(r.input_speed_rpm, r.torque_Nm, r.oil_temperature_C) for r in table.rows]
-    tasks = [(case, stiffness, rows[i:i + ROWS_PER_TASK], ppr) for i in range(0, len(rows), ROWS_PER_TASK)]
     pairs = sorted({(r[0], r[2]) for r in rows})
-    tasks_nl = [(case, stiffness, s, t, ppr) for s, t in pairs]
-    results = [r for chunk in run_tasks(_rows_task, tasks, workers=args.workers, scheduler=args.scheduler)
-               for r in chunk]
-    no_load = dict(zip(pairs, run_tasks(_no_load_task, tasks_nl, workers=args.workers, scheduler=args.scheduler)))
-    chart = run_tasks(_efficiency_task, [(case, stiffness, t) for t in CHART_TEMPERATURE_C
-                                         if lub.section.min_temperature_C <= t <= lub.section.max_temperature_C],
-                      workers=args.workers, scheduler=args.scheduler)
-    summary = _case_figures(case, stiffness, lub)
+    temps = [t for t in CHART_TEMPERATURE_C if lub.section.min_temperature_C <= t <= lub.section.max_temperature_C]
+    # one pool for everything (each worker loads the compiled kernels once); the case figures first,
+    # they are the longest single tasks
+    tasks = [("case", case, stiffness)] + [("chart", case, stiffness, t) for t in temps] \
+        + [("rows", case, stiffness, rows[i:i + ROWS_PER_TASK], ppr) for i in range(0, len(rows), ROWS_PER_TASK)] \
+        + [("noload", case, stiffness, s, t, ppr) for s, t in pairs]
+    done = run_tasks(_task, tasks, workers=args.workers, scheduler=args.scheduler)
+    kinds = [t[0] for t in tasks]
+    summary = done[0]
+    chart = [d for k, d in zip(kinds, done) if k == "chart"]
+    results = [r for k, d in zip(kinds, done) if k == "rows" for r in d]
+    no_load = dict(zip(pairs, [d for k, d in zip(kinds, done) if k == "noload"]))
     summary["efficiency_chart"] = {"output_speed_rpm": list(CHART_OUTPUT_RPM), "torque_pct": list(CHART_TORQUE_PCT),
-                                   "temperature_C": [t for t in CHART_TEMPERATURE_C if lub.section.min_temperature_C
-                                                     <= t <= lub.section.max_temperature_C],
-                                   "efficiency": chart}
+                                   "temperature_C": temps, "efficiency": chart}
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     _write(out, args, base_case, base_stiffness, lub, table, results, no_load, summary, causes, ppr)

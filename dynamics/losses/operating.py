@@ -33,7 +33,7 @@ from dynamics.statics import nominal_q, solve_static
 
 FRICTION_TOL_RAD = 2.5e-8      # Newton on the friction loads: output-angle step below 0.005 arcsec
 FRICTION_MAX_ITER = 8
-POINTS_PER_REV = 24            # input angles per output revolution (mean and p-p of TE)
+POINTS_PER_REV = 16            # input angles per output revolution (mean and p-p of TE: a 1x line's p-p to 2 %)
 
 
 @dataclass(frozen=True)
@@ -284,3 +284,20 @@ def forward_efficiency(model: ReducerModel, lub: Lubricant, input_speed_rpm: flo
     run = run_direction(model, lub, input_speed_rpm, torque_Nm, oil_temperature_C, +1,
                         revolution_angles_deg(model, points_per_rev))
     return run.efficiency
+
+
+def simulate_condition(model: ReducerModel, lub: Lubricant, input_angle_deg, torque_Nm: float, direction: int,
+                       input_speed_rpm: float, oil_temperature_C: float, friction: bool = True) -> DirectionRun:
+    """The TE of a record's condition (the diagnosis' entry): input angles [deg, any, unwrapped],
+    torque_Nm >= 0 the load's magnitude resisting the motion, direction +1 forward / -1 backward, the
+    input speed [rpm] and oil temperature [C]; returns the DirectionRun (te_arcsec at each angle,
+    te_frictionless_arcsec, losses). The angles are solved in order, warm-started."""
+    if direction not in (1, -1):
+        raise DynamicsError(f"direction = {direction!r}: allowed +1 (forward) or -1 (backward)")
+    if not (math.isfinite(input_speed_rpm) and input_speed_rpm > 0):
+        raise DynamicsError(f"input speed = {input_speed_rpm!r} rpm: must be finite and > 0")
+    if not (math.isfinite(torque_Nm) and torque_Nm >= 0):
+        raise DynamicsError(f"torque = {torque_Nm!r} N m: must be finite and >= 0 (the load's magnitude)")
+    lub.check_temperature(oil_temperature_C)
+    return run_direction(model, lub, input_speed_rpm, torque_Nm, oil_temperature_C, direction,
+                         np.atleast_1d(np.asarray(input_angle_deg, float)), friction)
