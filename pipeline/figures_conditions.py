@@ -23,9 +23,9 @@ def gap_map(path, speed_rpm, torque_Nm, gap_pred, gap_frictionless, pp_fw_pred, 
         m = speed == s
         o = np.argsort(T[m])
         c = SPEED_COLOURS[i % len(SPEED_COLOURS)]
-        ax.plot(T[m][o], np.asarray(gap_pred)[m][o], "-", color=c, lw=1.6, label=f"{s:g} rpm predicted")
+        ax.plot(T[m][o], np.asarray(gap_pred)[m][o], "-", marker=".", color=c, lw=1.6, label=f"{s:g} rpm predicted")
         ax.plot(T[m][o], np.asarray(gap_frictionless)[m][o], ":", color=c, lw=1.0)
-        bx.plot(T[m][o], np.asarray(pp_fw_pred)[m][o], "-", color=c, lw=1.6, label=f"{s:g} rpm predicted fw")
+        bx.plot(T[m][o], np.asarray(pp_fw_pred)[m][o], "-", marker=".", color=c, lw=1.6, label=f"{s:g} rpm predicted fw")
         bx.plot(T[m][o], np.asarray(pp_bw_pred)[m][o], "--", color=c, lw=1.0, label=f"{s:g} rpm predicted bw")
         if gap_meas is not None:
             ax.plot(T[m][o], np.asarray(gap_meas)[m][o], "o", color=c, ms=4, mfc="none", label=f"{s:g} rpm measured")
