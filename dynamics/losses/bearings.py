@@ -5,7 +5,7 @@ Friction (Palmgren 1959, Ball and roller bearing engineering; Harris & Kotzalas 
        the viscous (no-load) moment of an oil-bath bearing
   M1 = f1 P dm                    [N mm]: the load moment (P the bearing load [N])
 Radial lip seal: friction power P = 7.69e-6 d^2 n [W] (d mm, n rpm; Freudenberg Simrit catalogue,
-mineral oil at 40-80 C), i.e. a speed-independent moment 7.34e-5 d^2 N mm * 1e3 / 1e3: M = 7.34e-5 d^2 N m.
+mineral oil at 40-80 C), i.e. a speed-independent moment M = P / omega = 7.34e-5 d^2 [N m].
 ISO 281:2007 (radial roller bearings, line contact):
   C_r = b_m f_c (i L_we cos a)^(7/9) Z^(3/4) D_we^(29/27)  [N, mm], b_m = 1.1 (machined rings),
   f_c from Lundberg-Palmgren with lambda nu = 0.83 (reproduces ISO 281 table 7 to 0.1),
