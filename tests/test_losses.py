@@ -177,3 +177,19 @@ def test_the_frictionless_catalog_loop_width_is_the_catalog_backlash_and_frictio
     assert loop.width_frictionless_at_zero_arcmin == pytest.approx(hysteresis(model, 6).backlash_arcmin, rel=1e-6)
     assert loop.width_at_zero_arcmin >= loop.width_frictionless_at_zero_arcmin
     assert loop.torsional_rigidity_secant_Nm_per_arcmin < loop.torsional_rigidity_Nm_per_arcmin
+
+
+def test_bearing_lives_follow_iso_281_from_the_model_s_loads(model):
+    """Each entry is (C / P)^(10/3) 1e6 revolutions at its speed; the system of all crank bearings
+    lives shorter than its weakest bearing; the speeds are the crank's relative to disc and carrier
+    at the rated output speed: (i - 1) z1 / z2 times it for both (the disc turns with the carrier)."""
+    from dynamics.losses.life import bearing_lives
+    r = bearing_lives(model, LUB, 40.0, points_per_rev=6)
+    c = model.case
+    n_rel = (model.ratio - 1) * c.stage1.z1 / c.stage1.z2 * c.operation.rated_output_speed_rpm
+    for b in r["bearings"]:
+        assert b["speed_rpm"] == pytest.approx(n_rel, rel=1e-6)
+        assert b["L10_h"] == pytest.approx((b["C_N"] / b["P_N"]) ** (10 / 3) * 1e6 / (60 * b["speed_rpm"]), rel=1e-12)
+    assert len(r["bearings"]) == 4 * c.carrier.crank_count     # two needles and two supports per crank
+    assert r["system_L10_h"] < r["weakest_L10_h"]
+    assert r["weakest_L10_over_catalog"] == pytest.approx(r["weakest_L10_h"] / 6000.0)
