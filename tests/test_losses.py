@@ -193,3 +193,13 @@ def test_bearing_lives_follow_iso_281_from_the_model_s_loads(model):
     assert len(r["bearings"]) == 4 * c.carrier.crank_count     # two needles and two supports per crank
     assert r["system_L10_h"] < r["weakest_L10_h"]
     assert r["weakest_L10_over_catalog"] == pytest.approx(r["weakest_L10_h"] / 6000.0)
+
+
+def test_simulate_condition_is_the_operating_point_at_the_record_s_angles(model):
+    from dynamics.losses import simulate_condition
+    from dynamics.losses.operating import revolution_angles_deg
+    op = operating_point(model, LUB, 900.0, 150.0, 30.0, points_per_rev=4)
+    run = simulate_condition(model, LUB, revolution_angles_deg(model, 4), 150.0, -1, 900.0, 30.0)
+    assert np.allclose(run.te_arcsec, op.backward.te_arcsec, atol=1e-9)
+    with pytest.raises(Exception, match="direction"):
+        simulate_condition(model, LUB, [0.0], 150.0, 0, 900.0, 30.0)
