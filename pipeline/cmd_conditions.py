@@ -243,6 +243,8 @@ def _write(out, args, case, stiffness, lub, table, results, no_load, summary, ca
 
 
 def _pictures(out: Path, case, table, results, doc) -> None:
+    import textwrap
+
     from pipeline.figures_conditions import efficiency_chart, gap_map
 
     def measured(col):
@@ -262,8 +264,8 @@ def _pictures(out: Path, case, table, results, doc) -> None:
             [r["gap_frictionless_arcsec"] for r in results], [r["te_pp_fw_arcsec"] for r in results],
             [r["te_pp_bw_arcsec"] for r in results], gap_meas=measured("gap_fw_minus_bw_arcsec"),
             pp_fw_meas=measured("te_pp_fw_arcsec"), pp_bw_meas=measured("te_pp_bw_arcsec"),
-            title=f"{case.name}: operating map{tail}" + (f" (extension: {', '.join(doc['diagnosis_causes'])})"
-                                                         if doc["diagnosis_causes"] else ""))
+            title=textwrap.fill(f"{case.name}: operating map{tail}" + (
+                f" (extension: {', '.join(doc['diagnosis_causes'])})" if doc["diagnosis_causes"] else ""), 110))
     ch, pub = doc["efficiency_chart"], PUBLISHED_EFFICIENCY
     eff = np.array([[[np.nan if v is None else v for v in row] for row in t] for t in ch["efficiency"]])
     efficiency_chart(out / "efficiency.png", ch["output_speed_rpm"], ch["torque_pct"], ch["temperature_C"], eff,

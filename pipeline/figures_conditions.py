@@ -43,8 +43,8 @@ def gap_map(path, speed_rpm, torque_Nm, gap_pred, gap_frictionless, pp_fw_pred, 
         a.grid(True, lw=0.3)
     ax.legend(fontsize=7, ncol=2, loc="lower left")
     bx.legend(fontsize=7, ncol=2, loc="best")
-    if title:
-        fig.suptitle(title, fontsize=10)
+    if title:       # above the panels' own titles, however many lines it wraps to
+        fig.suptitle(title, fontsize=10, y=0.93, va="bottom")
     save_figure(fig, path)
 
 
