@@ -5,18 +5,18 @@ case fingerprint (geometry.params.ReducerCase.to_dict), so a lubricant change do
 stale; the `conditions` artifacts record the section they used. Defaults are the shipped cases'
 ASSUMED lubricant (the bench does not name its oil): an ISO VG 68 mineral gear oil. Where a
 published constant spans a range the default is its middle and the comment gives the ends.
-Validated by geometry.params like every section (key, value and allowed range in the message);
-the fields use the same metadata schema as geometry.params._f (lo, hi, open_lo, open_hi, why).
+Validated by geometry.params like every section (key, value and allowed range in the message).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+
+from geometry.case_fields import ranged
 
 
 def _r(lo: float, hi: float, default: float, why: str = "", open_lo: bool = True) -> float:
-    """A field with an allowed range (open at lo unless said) and a default (geometry.params._f's schema)."""
-    return field(default=default, metadata={"lo": lo, "hi": hi, "open_lo": open_lo, "open_hi": False,
-                                            "why": why})
+    """A field with an allowed range (open at lo unless said) and a default."""
+    return ranged(lo, hi, open_lo=open_lo, why=why, default=default)
 
 
 @dataclass(frozen=True)
@@ -50,9 +50,8 @@ class Lubrication:
     # 0.0004 (same table)
     f1_needle: float = _r(0.0, 0.05, 0.00075)
     f1_tapered: float = _r(0.0, 0.05, 0.0004)
-    # ASSUMED sizes the case does not give: the main (carrier) bearing pair's pitch diameter and the
-    # output and input radial shaft seals (0 = none); RV-160N-sized by default
-    main_bearing_pitch_diameter_mm: float = _r(1.0, 2000.0, 250.0)
+    # ASSUMED sizes the case does not give: the output and input radial shaft seals (0 = none),
+    # RV-160N-sized by default (the main bearings' size is the case's [main_bearings] section)
     output_seal_diameter_mm: float = _r(0.0, 2000.0, 260.0, open_lo=False)
     input_seal_diameter_mm: float = _r(0.0, 500.0, 30.0, open_lo=False)
     # ISO 281 contamination factor: 0.5-0.6 "normal cleanliness" (ISO 281:2007 table 13)

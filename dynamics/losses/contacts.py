@@ -20,7 +20,8 @@ friction force or moment, a generalized force on the model's DOFs and a power lo
   involute mesh   Ohlendorf's tooth loss factor H_V = pi (u + 1) / (z1 u) (1 - eps + eps1^2 + eps2^2)
                   (ISO/TR 14179-2), P = mu H_V F_bn v_b, mu from the film at the pitch point; its
                   moment on the crank is not applied (the mesh is 1-2 % of the compliance)
-  main bearings   (carrier in housing) Palmgren M0 at output speed; lip seals (output, input)
+  main bearings   (carrier in housing, the case's [main_bearings] pair) Palmgren M0 at output speed; lip
+                  seals (output, input)
 Friction forces and moments enter as generalized forces; dynamics.losses.operating solves the
 statics with them. Rolling-bearing moments carry no film dependence (Palmgren's f1 is a constant).
 """
@@ -214,7 +215,7 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
     # the load torque, so the robust static solver closes the free play with it)
     om_out = dq[io]
     n_out = abs(om_out) * RPM_PER_RAD_S
-    M_main = 2 * viscous * brg.palmgren_no_load_Nm(sec.f0_main, nu_cSt, n_out, sec.main_bearing_pitch_diameter_mm)
+    M_main = 2 * viscous * brg.palmgren_no_load_Nm(sec.f0_main, nu_cSt, n_out, case.main_bearings.pitch_diameter_mm)
     M_seal_out = brg.seal_moment_Nm(sec.output_seal_diameter_mm)
     power["main_bearings"] = M_main * abs(om_out)
     power["seals"] = M_seal_out * abs(om_out) + brg.seal_moment_Nm(sec.input_seal_diameter_mm) * abs(om_in)
