@@ -5,7 +5,8 @@ speed omega_in in `direction` (+1 forward, -1 backward), each contact gets its n
 state, its sliding and rolling velocities from the rigid kinematics (dq/dth of
 dynamics.statics.nominal_q, times omega_in), its regime from dynamics.losses.lubricant, and so a
 friction force or moment, a generalized force on the model's DOFs and a power loss:
-  cycloid - pin   line contact of the pin (radius r_p) on the disc profile (signed radius from the
+  cycloid - pin   line contact of the pin (radius r_p, its seat moved by the housing's modes, the
+                  friction's reaction on them) on the disc profile (signed radius from the
                   pin-centre curve's curvature): sliding v_s = disc velocity at the contact along
                   the tangent, entrainment u_e = |2 u_c - v_s| / 2 with u_c = -r_p dpsi/dt the
                   contact's speed over the fixed pin (psi the normal's angle); friction mu N opposes
@@ -125,8 +126,12 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
     width = case.cycloid.width_mm * 1e-3
     sigma = composite_roughness_m(sec.disc_Ra_um, sec.pin_Ra_um)
     sel = np.argwhere(forces > 0.0)
+    hphi, hdof = p.housing_phi, p.housing_dof            # the elastic housing's modes move the pin seats
+    pins = p.pins.copy()
+    if len(hdof):
+        pins[:, :2] += np.einsum("kci,i->kc", hphi, q[hdof])
     if len(sel):
-        fr = _pin_frames(np.stack([q, qa, qb]), sel.astype(np.int64), p.pins, p.dof, p.disc_rotation_rad,
+        fr = _pin_frames(np.stack([q, qa, qb]), sel.astype(np.int64), pins, p.dof, p.disc_rotation_rad,
                          p.R_m, p.E_m, p.zp)
         psi, kappa = fr[0, :, 0], fr[0, :, 1]
         # the normal's turning rate: its angle change along `shape`, times the motion's rate along it
@@ -138,7 +143,7 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
         dd, kk = sel[:, 0], sel[:, 1]
         rp = p.pins[kk, 2]
         ixyz = p.dof[dd]                                      # (m, 3) disc x, y, rotation
-        r = p.pins[kk, :2] - rp[:, None] * n - q[ixyz[:, :2]]  # contact point from the disc centre
+        r = pins[kk, :2] - rp[:, None] * n - q[ixyz[:, :2]]    # contact point from the disc centre
         v = dq[ixyz[:, :2]] + dq[ixyz[:, 2]][:, None] * np.column_stack([-r[:, 1], r[:, 0]])
         vs = np.sum(v * t, axis=1)                            # disc sliding over the pin
         uc = -rp * dpsi                                       # contact point's speed over the pin
@@ -151,6 +156,8 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
         np.add.at(f, ixyz[:, 0], Ft[:, 0])
         np.add.at(f, ixyz[:, 1], Ft[:, 1])
         np.add.at(f, ixyz[:, 2], r[:, 0] * Ft[:, 1] - r[:, 1] * Ft[:, 0])
+        if len(hdof):                                         # the reaction on the pin seats
+            f[hdof] -= np.einsum("mci,mc->i", hphi[kk], Ft)
         power["pins"] = float(np.sum(reg.friction * N * np.abs(vs)))
         pin_mu, pin_lam, pin_h = reg.friction, reg.film_parameter, reg.film_m
     else:
