@@ -313,10 +313,8 @@ class ReducerCase:
         return out
 
     def to_dict(self) -> dict:
-        """The content the case fingerprint hashes: every section but `tolerances` (see Tolerances)
-        and `lubrication` (read by the operating map only, recorded in its artifacts)."""
-        skip = ("source", "tolerances", "lubrication")
-        return {k: v for k, v in dataclasses.asdict(self).items() if k not in skip}
+        """The content the case fingerprint hashes: every section but `tolerances` and `lubrication`."""
+        return {k: v for k, v in dataclasses.asdict(self).items() if k not in ("source", "tolerances", "lubrication")}
 
 
 def _build(cls: type, data: dict, section: str, source: str) -> Any:
