@@ -31,7 +31,7 @@ import numpy as np
 
 from dynamics import couplings
 from dynamics.couplings import mesh as mesh_coupling
-from dynamics.reducer import ReducerModel
+from dynamics.reducer import ReducerModel, build_model
 from dynamics.statics import solve_static
 from fem.stiffness import COMPONENTS, in_coupling, pin_series_tangents, support_compliance_parts
 
@@ -200,3 +200,18 @@ def against_reference(rigidity_Nm_per_arcmin: float, reference_Nm_per_arcmin: fl
             "note": "factor on one component's compliance that alone brings the rigidity to the "
                     "reference (first order in the shares at rated torque); components that cannot "
                     "do it alone (factor <= 0 or share ~ 0) are omitted or null"}
+
+
+def rigidity_band(model: ReducerModel, rigidity) -> dict:
+    """The catalog rigidity at the ends of each banded component's published constants (a component
+    whose entry carries `band_factors`: its compliance x factor at the low and high end, e.g. the
+    contact-layer law's c range of fem.components.joints). rigidity: ReducerModel -> N m/arcmin (the
+    catalog test). Returns {component: {"factors": [lo, hi], "rigidity_Nm_per_arcmin": [at lo, at hi]}}."""
+    out = {}
+    for name, entry in model.stiffness.parts.items():
+        factors = getattr(entry, "band_factors", None)
+        if not factors:
+            continue
+        rig = [float(rigidity(build_model(model.case, model.stiffness.stiffened(name, 1.0 / f)))) for f in factors]
+        out[name] = {"factors": [float(f) for f in factors], "rigidity_Nm_per_arcmin": rig}
+    return out
