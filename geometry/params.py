@@ -27,6 +27,7 @@ from geometry import params_assembly, spur
 from geometry.artifacts import read_text
 from geometry.case_fields import CaseError, ranged as _f, where as _where
 from geometry.case_si import CaseSI, case_si
+from geometry.lubrication import Lubrication
 from geometry.params_assembly import Joints, MainBearings
 from geometry.pin_profile import min_convex_radius_mm
 
@@ -264,9 +265,9 @@ SECTIONS: dict[str, type] = {
     "cycloid": Cycloid, "modification": Modification, "stage1": Stage1, "carrier": Carrier,
     "disc": Disc, "crankshaft": Crankshaft, "housing": Housing, "material": Material,
     "operation": Operation, "dynamics": Dynamics, "joints": Joints, "main_bearings": MainBearings,
-    "errors": Errors, "tolerances": Tolerances,
+    "errors": Errors, "tolerances": Tolerances, "lubrication": Lubrication,
 }
-OPTIONAL_SECTIONS = ("errors", "tolerances")
+OPTIONAL_SECTIONS = ("errors", "tolerances", "lubrication")
 
 
 @dataclass(frozen=True)
@@ -286,6 +287,7 @@ class ReducerCase:
     main_bearings: MainBearings
     errors: Errors = Errors()
     tolerances: Tolerances = Tolerances()
+    lubrication: Lubrication = Lubrication()   # read by dynamics.losses only: not fingerprinted
     source: str = ""   # path the case was read from, for messages
 
     @property
@@ -319,8 +321,8 @@ class ReducerCase:
         return out
 
     def to_dict(self) -> dict:
-        """The content the case fingerprint hashes: every section but `tolerances` (see Tolerances)."""
-        return {k: v for k, v in dataclasses.asdict(self).items() if k not in ("source", "tolerances")}
+        """The content the case fingerprint hashes: every section but `tolerances` and `lubrication`."""
+        return {k: v for k, v in dataclasses.asdict(self).items() if k not in ("source", "tolerances", "lubrication")}
 
 
 def _build(cls: type, data: dict, section: str, source: str) -> Any:

@@ -290,12 +290,29 @@ def _load_sharing(model, out: Path, points: int = 41) -> None:
                  title=f"{model.case.name}: pin load sharing (static, input held, rated torque)")
 
 
+LOOP_OIL_C = 25.0      # the catalog test's oil (room temperature; at rest the film is gone anyway)
+
+
+def _loop_summary(loop) -> dict:
+    return {"oil_temperature_C": LOOP_OIL_C, "width_at_zero_arcmin": loop.width_at_zero_arcmin,
+            "width_frictionless_at_zero_arcmin": loop.width_frictionless_at_zero_arcmin,
+            "max_width_beyond_5pct_rated_arcmin": loop.max_width_arcmin,
+            "torsional_rigidity_Nm_per_arcmin": loop.torsional_rigidity_Nm_per_arcmin,
+            "torsional_rigidity_secant_Nm_per_arcmin": loop.torsional_rigidity_secant_Nm_per_arcmin,
+            "what": "the catalog loop with contact friction at boundary friction (no film at rest) opposing "
+                    "each contact's creep (dynamics.losses.operating.friction_loop); width = falling minus "
+                    "rising branch at zero torque (free play plus friction)"}
+
+
 def cmd_hysteresis(args) -> int:
     from dynamics.budget import against_reference, compliance_budget, rigidity_band
     from dynamics.catalog import hysteresis
     from pipeline.figures import budget_bars, hysteresis_loop
     model, spath = _model(args)
+    from dynamics.losses import Lubricant
+    from dynamics.losses.operating import friction_loop
     res = hysteresis(model)
+    loop = friction_loop(model, Lubricant.from_section(model.case.lubrication), LOOP_OIL_C)
     budget = compliance_budget(model)
     band = rigidity_band(model, lambda m: hysteresis(m).torsional_rigidity_Nm_per_arcmin)
     ref = against_reference(res.torsional_rigidity_Nm_per_arcmin,
@@ -303,6 +320,8 @@ def cmd_hysteresis(args) -> int:
     out = Path(args.out)
     write_json_atomic(out / "hysteresis.json", {"case": model.case.name, "stiffness": str(spath),
                                                 **res.summary(),
+                                                "loop_width_at_zero_arcmin": loop.width_at_zero_arcmin,
+                                                "friction_loop": _loop_summary(loop),
                                                 "compliance_budget": budget["compliance_budget"],
                                                 "compliance_budget_by_coupling": budget["by_coupling"],
                                                 "compliance_budget_torque_Nm": budget["torque_Nm"],
@@ -319,11 +338,15 @@ def cmd_hysteresis(args) -> int:
     hysteresis_loop(out / "hysteresis.png", -100 * res.torque_Nm / res.rated_torque_Nm, res.output_angle_arcmin,
                     rigidity_Nm_per_arcmin=res.torsional_rigidity_Nm_per_arcmin,
                     lost_motion_arcmin=res.lost_motion_arcmin, backlash_arcmin=res.backlash_arcmin,
-                    rated_Nm=res.rated_torque_Nm, title=f"{model.case.name}: catalog hysteresis test, input locked")
+                    rated_Nm=res.rated_torque_Nm, title=f"{model.case.name}: catalog hysteresis test, input locked",
+                    secant_Nm_per_arcmin=res.torsional_rigidity_secant_Nm_per_arcmin,
+                    friction=(-100 * loop.torque_Nm / loop.rated_torque_Nm, loop.output_angle_arcmin,
+                              loop.width_at_zero_arcmin))
     _load_sharing(model, out)
     budget_bars(out / "compliance_budget.png", budget, model.case.name)
     _say(args, f"hysteresis: {out}/hysteresis.json: rigidity {res.torsional_rigidity_Nm_per_arcmin:.1f} "
-               f"N m/arcmin, lost motion {res.lost_motion_arcmin:.3f} arcmin, backlash {res.backlash_arcmin:.3f} arcmin")
+               f"N m/arcmin (secant {res.torsional_rigidity_secant_Nm_per_arcmin:.1f}), loop width at zero "
+               f"{loop.width_at_zero_arcmin:.3f} arcmin with friction, lost motion {res.lost_motion_arcmin:.3f} arcmin, backlash {res.backlash_arcmin:.3f} arcmin")
     for name, b in band.items():
         _say(args, f"rigidity band ({name}: compliance x {b['factors'][0]:.2f} .. x {b['factors'][1]:.2f}): "
                    f"{b['rigidity_Nm_per_arcmin'][0]:.1f} .. {b['rigidity_Nm_per_arcmin'][1]:.1f} N m/arcmin")

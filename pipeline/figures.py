@@ -39,12 +39,16 @@ def _polyline(x, y, segments):
 
 
 def hysteresis_loop(path, torque_pct: np.ndarray, angle_arcmin: np.ndarray, *, rigidity_Nm_per_arcmin: float,
-                    lost_motion_arcmin: float, backlash_arcmin: float, rated_Nm: float, title: str) -> None:
+                    lost_motion_arcmin: float, backlash_arcmin: float, rated_Nm: float, title: str,
+                    secant_Nm_per_arcmin: float | None = None, friction: tuple | None = None) -> None:
     """The catalog curve: torsion angle against torque in % of rated, input locked, the sweep
     0 -> +100 -> -100 -> +100 % drawn as rising-torque and falling-torque branches; lost motion
-    (angle between +-3 %) and torsional rigidity b/a (50..100 %) dimensioned; a zoom on +-10 %."""
+    (angle between +-3 %) and torsional rigidity b/a (50..100 %) dimensioned; a zoom on +-10 %.
+    friction = (torque_pct, angle_arcmin, width_at_zero_arcmin): the loop with contact friction
+    (dynamics.losses.operating.friction_loop) drawn over it, its width at zero torque marked."""
     x, y = np.asarray(torque_pct, float), np.asarray(angle_arcmin, float)
-    y = y - 0.5 * (_at(x, y, 3.0) + _at(x, y, -3.0))     # catalog origin: centre of the lost motion
+    y0 = 0.5 * (_at(x, y, 3.0) + _at(x, y, -3.0))         # catalog origin: centre of the lost motion
+    y = y - y0
     fig, (ax, zoom) = figure(1, 2, figsize=(12, 5.2), gridspec_kw={"width_ratios": [3, 2]})
     rising = np.diff(x) > 0
     for a in (ax, zoom):
@@ -66,6 +70,18 @@ def hysteresis_loop(path, torque_pct: np.ndarray, angle_arcmin: np.ndarray, *, r
         ax.annotate(f"b/a = {rigidity_Nm_per_arcmin:.0f} N m/arcmin" if s > 0 else "b/a",
                     (xb, 0.5 * (ya + yb)), xytext=(-8 if s > 0 else 8, 0), textcoords="offset points",
                     ha="right" if s > 0 else "left", va="center", fontsize=9)
+    if secant_Nm_per_arcmin is not None:
+        ax.plot([], [], " ", label=f"secant (midpoint to +-rated): {secant_Nm_per_arcmin:.0f} N m/arcmin")
+    if friction is not None:
+        fx, fy, fw = np.asarray(friction[0], float), np.asarray(friction[1], float) - y0, friction[2]
+        for a in (ax, zoom):
+            a.plot(fx, fy, color="k", lw=0.8, marker=".", ms=3)
+        ax.plot([], [], color="k", lw=0.8, marker=".", ms=3, label="with contact friction (boundary)")
+        hi_f = fy[np.flatnonzero((np.diff(fx, prepend=fx[0]) < 0) & (fx > 0))[-1]]
+        lo_f = fy[np.flatnonzero((np.diff(fx, prepend=fx[0]) > 0) & (fx < 0))[-1]]
+        zoom.annotate("", xy=(-1.0, hi_f), xytext=(-1.0, lo_f), arrowprops=dict(arrowstyle="<->", lw=1.0, color="k"))
+        zoom.text(-1.5, 0.5 * (lo_f + hi_f), f"width at zero\nwith friction\n{fw:.3f} arcmin", ha="right",
+                  va="center", fontsize=8)
     ax.set_ylabel("torsion angle of the output, input locked [arcmin]\n(+ torque and + angle: forward)")
     ax.set_title(title, fontsize=10)
     ax.legend(loc="upper left", fontsize=8)

@@ -96,6 +96,16 @@ def key_figures(case_dir: Path, rated_Nm: float | None, ratio: float | None) -> 
             "stiffer than the reference: a compliance of the real path that the model lacks or underrates reads "
             "as excess stiffness (the compliance budget shows what the model's path holds)"
             if rig and ((cat and rig > 1.2 * cat[1]) or bench) else ""),
+        Row("torsional rigidity, secant (lost-motion midpoint to +-rated)",
+            _f(_get(h, "torsional_rigidity_secant_Nm_per_arcmin"), ".0f", "N m/arcmin"), "-",
+            "hysteresis/hysteresis.json", "the whole wind-up, clearance knee included: below b/a, which is "
+            "the slope of the stiff upper part"),
+        Row("loop width at zero torque with contact friction", _f(_get(h, "loop_width_at_zero_arcmin"), ".3f", "arcmin"),
+            "-", "hysteresis/hysteresis.json", "free play plus what boundary friction holds at rest "
+            "(dynamics.losses: the friction adds "
+            + _f(None if _get(h, "friction_loop") is None else 60 * (h["friction_loop"]["width_at_zero_arcmin"]
+                                                                     - h["friction_loop"]["width_frictionless_at_zero_arcmin"]),
+                 ".2f", "arcsec", "?") + ")"),
         Row("lost motion (angle between +-3 % rated)", _f(_get(h, "lost_motion_arcmin"), ".3f", "arcmin"),
             f"catalog <= {LOST_MOTION_CATALOG_ARCMIN:g} arcmin", "hysteresis/hysteresis.json",
             "lost motion = free play + elastic wind-up between -3 % and +3 % rated, so it exceeds the backlash"),
@@ -108,6 +118,7 @@ def key_figures(case_dir: Path, rated_Nm: float | None, ratio: float | None) -> 
             "the same free play taken up by the lumped model (every body free to settle, +-0.01 % rated) "
             "instead of the rigid disc on its eccentric, so it differs slightly from the rigid figure"),
     ]
+    rows += operating_rows(case_dir)
     if ls:
         lo, hi = ls.get("teeth_in_contact_range", [None, None])
         rows.append(Row("teeth in contact per disc at rated torque (over a mesh cycle)", f"{lo}-{hi}",
@@ -207,3 +218,33 @@ def _paper001_text(p: dict) -> str:
         return "built (see the diagnosis section)"
     return (f"simulated no-load peak-to-peak {sim:.3g} arcsec; an output coaxiality of {um:.3g} um at "
             f"r = {p.get('output_flange_radius_mm', float('nan')):g} mm closes the gap")
+
+
+def operating_rows(case_dir: Path) -> list[Row]:
+    """Efficiency, bearing life and the operating map's gap error (the `conditions` stage)."""
+    c = read_json(case_dir / "conditions" / "conditions.json")
+    if not c:
+        return [Row("operating map (efficiency, bearing life, gap over speed and torque)", "not built", "-",
+                    "conditions/conditions.json", "built where the case has a conditions table (RV-160N bench)")]
+    rp, life, pub = c["rated_point"], c["bearing_life"], c["rated_point"]["published"]
+    rows = [Row(f"efficiency at rated torque, {c['bearing_life']['output_speed_rpm']:g} rpm output, 40 C oil",
+                _f(rp["efficiency"], ".1%"), f"{pub['value']:.0%} ({pub['band'][0]:.0%}-{pub['band'][1]:.0%}): "
+                f"{pub['source']}", "conditions/conditions.json",
+                f"pin friction {rp['pin_friction_mean']:.3f} at film parameter {rp['pin_film_parameter_mean']:.2f}"),
+            Row("bearing life L10 at rated torque and speed (weakest; system)",
+                f"{life['weakest_L10_h']:.0f} h ({life['weakest']}); system {life['system_L10_h']:.0f} h "
+                f"(x {life['system_L10_over_catalog']:.2f}); modified Lnm {life['system_Lnm_h']:.0f} h",
+                f"catalog rated life K = {life['catalog_rated_life_h']:g} h", "conditions/conditions.json",
+                "ISO 281 from the model's load distribution; the system life of all crank bearings"),
+            Row("starting torque at the input (no load, 25 C)", _f(c["starting_torque_input_Nm"]["25"], ".2f", "N m"),
+                "-", "conditions/conditions.json", "boundary friction, bearing preload moments, seals")]
+    m = c.get("against_measured")
+    if m:
+        sl = m["gap_slope_by_speed_rpm"]
+        txt = "; ".join(f"{k} rpm {v['predicted_arcsec_per_Nm']:.3f} (bench {v['measured_arcsec_per_Nm']:.3f})"
+                        for k, v in sl.items() if v["rows"] >= 5)
+        rows.append(Row("forward-backward gap over the bench's conditions: RMS error",
+                        f"{m['gap_rms_error_arcsec']:.1f} arcsec (frictionless {m['gap_rms_error_frictionless_arcsec']:.1f})",
+                        f"{m['rows']} bench conditions (conditions_25C.csv)", "conditions/conditions.json",
+                        f"gap per N m by input speed: {txt} arcsec/(N m)"))
+    return rows
