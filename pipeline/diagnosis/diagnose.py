@@ -82,7 +82,8 @@ class Diagnosis:
                              for f in self.findings],
                 "baseline": {"residual_rms_arcsec": self.residual_rms_arcsec,
                              "residual_pp_arcsec": self.residual_pp_arcsec},
-                "extension": ext}
+                "extension": ext,
+                "notes": list(self.notes)}   # input repairs (warnings), causes not reported, residual left
 
 
 def holdout_split(records, groups) -> tuple[list[int], list[int]]:
