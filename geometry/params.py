@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from geometry import spur
+from geometry import clearance_limits, spur
 from geometry.artifacts import InputError
 from geometry.pin_profile import min_convex_radius_mm
 
@@ -519,43 +519,13 @@ def _check_stage1(case: ReducerCase) -> None:
                         f"contact between pairs); lower |x1| or use more teeth")
 
 
-# Largest backlash a case may have: 60 x the catalog's 1 arcmin lost motion. Beyond it the
-# modification is no longer small beside the eccentricity (the clearance model is first order in
-# dR, dRr against E) and the teeth barely engage; a 1e-9 mm eccentricity gave 179487 rad.
-MAX_BACKLASH_ARCMIN = 60.0
-# Largest interference (negative clearance) a case may have: ASSUMED 3 um, about a pin's contact
-# approach at its rated-torque force (~600 N on the RV-40E at 127-228 N/um tooth stiffness): a
-# preload up to the rated load; beyond it the pins are press-fitted and no pin pose is free (the
-# backlash search found no root at -39 um).
-MAX_INTERFERENCE_UM = 3.0
-
-
 def _check_backlash(case: ReducerCase) -> None:
-    """The closed-form backlash b0 = (dRr - dR sqrt(1 - K1^2)) / (E zc) (geometry.clearance, pin
-    errors folded into dR, dRr) must stay within MAX_BACKLASH_ARCMIN."""
+    """The closed-form backlash and interference of the modified profile within their limits."""
     c, m, e = case.cycloid, case.modification, case.errors
-    dR, dRr = m.offset_mm - e.pin_circle_radius_um * 1e-3, m.equidistant_mm - e.pin_radius_um * 1e-3
-    clearance_mm = dRr - dR * math.sqrt(max(1.0 - (c.eccentricity_mm * c.zp / c.pin_circle_radius_mm) ** 2, 0.0))
-    b0_arcmin = math.degrees(clearance_mm / (c.eccentricity_mm * c.zc)) * 60.0
-    if clearance_mm * 1e3 < -MAX_INTERFERENCE_UM:
-        raise CaseError(
-            f"{_where('modification', 'offset_mm', case.source)} = {m.offset_mm:g} with equidistant_mm = "
-            f"{m.equidistant_mm:g}: the profile's clearance dRr - dR sqrt(1 - K1^2) is "
-            f"{clearance_mm * 1e3:.4g} um (pin errors included), an interference; allowed down to "
-            f"-{MAX_INTERFERENCE_UM:g} um (a preload of about the rated pin force): offset_mm <= "
-            f"{(dRr + MAX_INTERFERENCE_UM * 1e-3) / math.sqrt(max(1.0 - (c.eccentricity_mm * c.zp / c.pin_circle_radius_mm) ** 2, 1e-12)) + e.pin_circle_radius_um * 1e-3:.4g} mm "
-            f"for this equidistant, or equidistant_mm >= "
-            f"{dR * math.sqrt(max(1.0 - (c.eccentricity_mm * c.zp / c.pin_circle_radius_mm) ** 2, 0.0)) - MAX_INTERFERENCE_UM * 1e-3 + e.pin_radius_um * 1e-3:.4g} mm for this offset")
-    if b0_arcmin > MAX_BACKLASH_ARCMIN:
-        e_min = clearance_mm / (c.zc * math.radians(MAX_BACKLASH_ARCMIN / 60.0))
-        raise CaseError(
-            f"{_where('cycloid', 'eccentricity_mm', case.source)} = {c.eccentricity_mm:g} with "
-            f"[modification] offset_mm = {m.offset_mm:g}, equidistant_mm = {m.equidistant_mm:g}: the "
-            f"profile's clearance {clearance_mm * 1e3:.4g} um over E zc gives {b0_arcmin:.4g} arcmin of "
-            f"backlash (b0 = (dRr - dR sqrt(1 - K1^2)) / (E zc)); allowed at most {MAX_BACKLASH_ARCMIN:g} "
-            f"arcmin: eccentricity_mm >= {e_min:.3g} for this modification, or a clearance <= "
-            f"{math.radians(MAX_BACKLASH_ARCMIN / 60.0) * c.eccentricity_mm * c.zc * 1e3:.4g} um for this "
-            f"eccentricity")
+    key, why = clearance_limits.problem(c.eccentricity_mm, c.zc, c.zp, c.pin_circle_radius_mm, m.offset_mm,
+                                        m.equidistant_mm, e.pin_circle_radius_um, e.pin_radius_um)
+    if why:
+        raise CaseError(f"{_where(*key, case.source)} = {getattr(getattr(case, key[0]), key[1]):g}{why}")
 
 
 def _check_undercut(case: ReducerCase) -> None:
