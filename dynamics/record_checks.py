@@ -223,8 +223,7 @@ def resample_gaps(name: str, time_s, columns: dict[str, np.ndarray], output_angl
     k = int(gap[j])
     n_missing = int(drops.sum())
     share = n_missing / (len(t) + n_missing)
-    where = (f"largest between samples {k} and {k + 1}, t = {t[k]:g} to {t[k + 1]:g} s, "
-             f"{spans[j]:.3g} deg of output")
+    where = f"between samples {k} and {k + 1}, t = {t[k]:g} to {t[k + 1]:g} s"
     limit = 360.0 / zp
     if spans[j] > limit:
         return None, Finding("gap", "error", (
@@ -241,7 +240,7 @@ def resample_gaps(name: str, time_s, columns: dict[str, np.ndarray], output_angl
     out = {c: np.interp(grid, t, np.asarray(v, float)) for c, v in columns.items()}
     return (grid, out), Finding("gap", "warning", (
         f"{name}: {n_missing} samples missing on the record's {clock:.4g} s clock ({share:.1%}, "
-        f"{gap.size} gap(s), {where}): resampled onto the clock by linear interpolation in time"),
+        f"{gap.size} gap(s), the largest {spans[j]:.3g} deg of output {where}): resampled onto the clock by linear interpolation in time"),
         tuple(int(g) for g in gap))
 
 

@@ -1,7 +1,8 @@
 """Diagnosis of bench records against the model: residual, causes, extension, gain.
 
 diagnose(case, stiffness, records) runs blind on the records (conditions read from each record):
-  0. input checks (inputs.py): ratio, time unit, encoder glitches (masked), time gaps; refused
+  0. input checks (inputs.py, dynamics.record_checks): ratio, time unit, stated torque, encoder
+     glitches and missing samples (repaired), wind-up against the torque column; refused
      records raise RecordError (one line), repairs and doubts become notes;
   1. simulate each record (simulate.py), residual = measured TE - simulated TE;
   2. one free offset per encoder-zero group (zeros.py) is removed in every RMS reported;
