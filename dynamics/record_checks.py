@@ -193,8 +193,9 @@ def repair_glitches(name: str, time_s, input_angle_deg, output_angle_deg, ratio:
     fixed = (interpolate_over(time_s, a_in, idx), interpolate_over(time_s, a_out, idx))
     return fixed, Finding("glitch", "warning", (
         f"{name}: {idx.size} encoder glitch(es) at samples {_samples_text(idx)} (largest at sample {k}, "
-        f"t = {time_s[k]:g} s: TE {float(np.max(dev)):.4g} arcsec off its neighbours, bound "
-        f"{float(thr[k]):.3g} arcsec): angles replaced by linear interpolation in time between the "
+        f"t = {time_s[k]:g} s: TE {float(np.max(dev)):.4g} arcsec off its neighbours; bound {float(thr[k]):.3g} "
+        f"arcsec, the smaller of the reducer's reach in that sample period, {float(np.asarray(bound_arcsec)[k]):.4g} "
+        f"arcsec, and {GLITCH_SIGMAS:g} sigma of the record's scatter): angles replaced by linear interpolation in time between the "
         f"nearest good samples"), tuple(int(i) for i in idx))
 
 

@@ -85,6 +85,7 @@ def _on_signal(signum, frame):
         child.join(timeout=5)
     if args is not None:
         _clear_temps(args)
+    runlock.release(_RUN.get("lock"))
     try:    # the main thread may have been stopped inside a write to these very streams
         sys.stdout.flush()
         print(INTERRUPTED, file=sys.stderr, flush=True)
@@ -93,10 +94,10 @@ def _on_signal(signum, frame):
     os._exit(128 + signum)
 
 
-def _check_output(args) -> int | None:
+def _check_output(args) -> tuple | None:
     """Refuse an unusable --out before anything runs, take the output's run lock (pipeline.runlock:
-    a second run on the same output is refused), then clear what a killed run left there. Returns
-    the lock's descriptor (None without --out)."""
+    a second run on the same output waits for it), then clear what a killed run left there. Returns
+    the lock (None without --out)."""
     out = getattr(args, "out", None)
     if out is None:
         return None
@@ -105,9 +106,9 @@ def _check_output(args) -> int | None:
         folder, target = path.parent, path.name
     else:
         folder, target = checks.out_folder("--out", out), None
-    fd = runlock.acquire(folder, target, f"python -m pipeline {args.command}", os.fspath(out))
+    lock = runlock.acquire(out, f"python -m pipeline {args.command}", os.fspath(out))
     checks.remove_stale_temps(folder, target=target)
-    return fd
+    return lock
 
 
 def _clear_temps(args) -> None:
@@ -133,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
         lock = _check_output(args)
         if argv is None:
-            _RUN.update(args=args, pid=os.getpid())
+            _RUN.update(args=args, pid=os.getpid(), lock=lock)
         return int(args.func(args) or 0)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -135,16 +135,27 @@ def test_a_task_that_always_kills_its_dask_worker_is_named(cluster):
         run_tasks(_square_or_die_always, [(k, 1) for k in range(3)], scheduler=cluster.scheduler_address)
 
 
+def test_a_cluster_left_without_workers_ends_the_sweep_naming_the_task(monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    from pipeline import sweep
+    monkeypatch.setattr(sweep, "NO_WORKER_TIMEOUT_S", 2.0)   # 120 s in use: a worker may take that to join
+    with distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp://", host="127.0.0.1",
+                                  dashboard_address=None) as c:
+        with pytest.raises(SweepError, match=r"task 1 of 2 unfinished: the Dask cluster at tcp://127\.0\.0\.1:\d+ "
+                                             r"has had no worker for 2 s"):
+            run_tasks(_square_or_die_always, [(0, 9), (1, 9)], scheduler=c.scheduler_address)
+
+
 # ------------------------------------------------------------------ two runs on one output
 def _digest(folder: Path) -> dict:
     return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir())
-            if p.is_file() and not p.name.endswith(".lock")}
+            if p.is_file()}
 
 
 def test_a_second_run_on_the_same_output_waits_and_never_clears_the_first_runs_temporaries(tmp_path):
     out = tmp_path / "hertz"
     out.mkdir()
-    fd = runlock.acquire(out, None, "python -m pipeline fem (the first run)", str(out))
+    lock = runlock.acquire(out, "python -m pipeline fem (the first run)", str(out))
     temp = out / ".hertz.abcdefgh.json"               # the first run's write in progress
     temp.write_text("{")
     cmd = [sys.executable, "-m", "pipeline", "fem", "--benchmark", "hertz", "--radius-mm", "3",
@@ -156,22 +167,23 @@ def test_a_second_run_on_the_same_output_waits_and_never_clears_the_first_runs_t
         assert temp.exists() and not (out / "hertz.json").exists()
         with pytest.raises(runlock.RunLockError, match=r"another run \(pid \d+: python -m pipeline fem "
                                                        r"\(the first run\)\) is writing there"):
-            runlock.acquire(out, None, "a third", str(out), wait=False)
+            runlock.acquire(out, "a third", str(out), wait=False)
     finally:
         temp.unlink()
-        runlock.release(fd)                          # the first run ends: the second starts
+        runlock.release(lock)                        # the first run ends: the second starts
     _, err = second.communicate(timeout=600)
     assert second.returncode == 0, err
     assert err.startswith("waiting: another run (pid ") and err.count("\n") == 1
-    assert (out / "hertz.json").exists()
+    assert (out / "hertz.json").exists() and not runlock.lock_path(out).exists()   # nothing left beside it
 
 
 def test_the_lock_of_a_killed_run_does_not_block_the_next(tmp_path):
     code = ("import sys, os, signal; from pipeline import runlock; "
-            f"runlock.acquire({str(tmp_path)!r}, None, 'doomed', 'x'); os.kill(os.getpid(), signal.SIGKILL)")
+            f"runlock.acquire({str(tmp_path / 'out')!r}, 'doomed', 'x'); os.kill(os.getpid(), signal.SIGKILL)")
     subprocess.run([sys.executable, "-c", code], cwd=ROOT)
-    fd = runlock.acquire(tmp_path, None, "next", "x", wait=False)   # no wait: the kernel dropped it
-    runlock.release(fd)
+    assert runlock.lock_path(tmp_path / "out").exists()             # left behind by the killed run
+    lock = runlock.acquire(tmp_path / "out", "next", "x", wait=False)   # no wait: the kernel dropped it
+    runlock.release(lock)
 
 
 # ------------------------------------------------------------------ full disk
@@ -207,7 +219,7 @@ def test_a_full_disk_is_one_line_and_leaves_every_earlier_artifact_intact(tmp_pa
     assert rc == 2 and err.count("\n") == 1 and err.startswith("error: ") and "No space left on device" in err
     assert re.match(rf"error: {re.escape(str(out))}/[^./][^/]*: No space left on device$", err)   # the artifact, not its temporary
     assert _digest(out) == before                                  # the same bytes, nothing half-written
-    assert not [p for p in out.iterdir() if p.name.startswith(".") and not p.name.endswith(".lock")]
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]   # no temporary, no lock left
 
 
 def test_an_enospc_without_a_file_name_names_the_artifact(tmp_path):

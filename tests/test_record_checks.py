@@ -101,7 +101,7 @@ def test_a_record_that_reverses_is_refused_unless_splitting_is_asked(tmp_path, p
 
 # ------------------------------------------------------------------ encoder glitches
 def test_the_glitch_bound_is_the_reducers_own_motion():
-    # RV-40E: lost motion 2 x 0.39 arcmin ~ 47 arcsec + 2 x 2058 N m / 108 N m/arcmin = 2287 arcsec over
+    # RV-40E: lost motion 2 x 0.39 arcmin ~ 47 arcsec + 2 x 2058 N m / 108 N m/arcmin = 2333 arcsec over
     # any time; over 0.1 ms at most v_max dt = 2058 / sqrt(371271 x 0.05) rad/s x 0.1 ms = 312 arcsec
     # (over 1 ms the 3116 arcsec this gives is beyond the span: the span bounds it)
     lm = lost_motion_arcsec(CASE)
