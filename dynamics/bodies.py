@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 
 
-def inertias(case) -> dict:
+def inertias(case, stiffness=None) -> dict:
     """Per DOF block of `dynamics.layout.DofLayout.standard`, the mass [kg] or inertia [kg m^2]
-    of each component of one item."""
+    of each component of one item (the housing: each mode's modal mass, from its FE)."""
     cy, s1, cr, dc, ks = case.cycloid, case.stage1, case.carrier, case.disc, case.crankshaft
     mm = 1e-3
     nc, nd = cr.crank_count, cy.disc_count
@@ -38,5 +38,6 @@ def inertias(case) -> dict:
     m_carrier = rho * math.pi * r_f ** 2 * 2 * w
     j_out = m_carrier * r_f ** 2 / 2 + case.dynamics.load_inertia_kg_m2 + nc * m_crank * a ** 2
     # the crank's lateral mass lumped equally at its disc planes (crank_axis: one item per plane)
+    hm = None if stiffness is None else stiffness.parts.get("housing")
     return {"carrier": [j_out], "crank_rotation": [j_crank], "crank_axis": [m_crank / nd, m_crank / nd],
-            "disc": [m_disc, m_disc, j_disc]}
+            "disc": [m_disc, m_disc, j_disc], "housing": [] if hm is None else list(hm.mass_kg)}

@@ -10,11 +10,13 @@ b0 = (dRr - dR sqrt(1 - K1^2)) / (E zc), K1 = E zp / R, pin errors folded into d
                        rated-torque force (~600 N on the RV-40E at 127-228 N/um tooth stiffness), a
                        preload up to the rated load; beyond it the pins are press-fitted and no pin
                        pose is free (the backlash search found no root at -39 um).
-Stand-alone (no import of geometry.params) so that params can call it.
+No import of geometry.params, so that params can call it (`check(case)` from validate).
 """
 from __future__ import annotations
 
 import math
+
+from geometry.case_fields import CaseError, where
 
 MAX_BACKLASH_ARCMIN = 60.0
 MAX_INTERFERENCE_UM = 3.0
@@ -45,3 +47,12 @@ def problem(E_mm: float, zc: int, zp: int, R_mm: float, offset_mm: float, equidi
             f"{clearance_mm / (zc * b_max):.3g} for this modification, or a clearance <= "
             f"{b_max * E_mm * zc * 1e3:.4g} um for this eccentricity")
     return ("", ""), ""
+
+
+def check(case) -> None:
+    """CaseError naming the key when the case's modification is beyond a limit (validate)."""
+    c, m, e = case.cycloid, case.modification, case.errors
+    key, why = problem(c.eccentricity_mm, c.zc, c.zp, c.pin_circle_radius_mm, m.offset_mm,
+                       m.equidistant_mm, e.pin_circle_radius_um, e.pin_radius_um)
+    if why:
+        raise CaseError(f"{where(*key, case.source)} = {getattr(getattr(case, key[0]), key[1]):g}{why}")

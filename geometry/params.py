@@ -22,8 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from geometry import clearance_limits, spur
-from geometry.artifacts import InputError
+from geometry import clearance_limits, params_assembly, spur
+from geometry.case_fields import CaseError, ranged as _f, where as _where
+from geometry.params_assembly import Joints, MainBearings
 from geometry.pin_profile import min_convex_radius_mm
 
 # Largest pin count accepted. Real cycloid reducers stay below it: RV reducers carry ~40 pins and
@@ -33,22 +34,6 @@ from geometry.pin_profile import min_convex_radius_mm
 ZP_MAX = 120
 NAME_PATTERN = re.compile(r"[A-Za-z0-9._-]{1,100}")   # the name becomes the build folder's name
 CASE_FILE_MAX_BYTES = 1 << 20                           # a case file is a few kB of TOML
-
-
-class CaseError(InputError):
-    """A case file that cannot describe a buildable reducer; the message names key, value, range."""
-
-
-def _f(lo: float | None = None, hi: float | None = None, *, open_lo: bool = True,
-       open_hi: bool = False, why: str = "", default: Any = dataclasses.MISSING) -> Any:
-    """A field with an allowed range (open at lo by default: sizes must be positive); `why` is
-    added to the message when a value falls outside."""
-    md = {"lo": lo, "hi": hi, "open_lo": open_lo, "open_hi": open_hi, "why": why}
-    if default is dataclasses.MISSING:
-        return field(metadata=md)
-    if isinstance(default, (list, tuple)):
-        return field(default=tuple(default), metadata=md)
-    return field(default=default, metadata=md)
 
 
 @dataclass(frozen=True)
@@ -115,6 +100,17 @@ class Crankshaft:
     needle_diameter_mm: float = _f(0.0)
     needle_length_mm: float = _f(0.0)
     needle_count: int = _f(4, open_lo=False)
+
+
+@dataclass(frozen=True)
+class Housing:
+    """The pin ring as an elastic body (fem.housing): wall, mounting flange, bolts (clamped)."""
+    pin_ring_outer_radius_mm: float = _f(0.0)   # housing wall outside the groove circle
+    pin_ring_length_mm: float = _f(0.0)         # axial length of the pin ring: both discs plus spacing
+    flange_outer_radius_mm: float = _f(0.0)     # mounting flange
+    bolt_count: int = _f(3, 64, open_lo=False, why="fewer than 3 do not clamp a flange in its plane")
+    bolt_circle_radius_mm: float = _f(0.0)
+    bolt_hole_radius_mm: float = _f(0.0)        # clearance hole (the clamped edge)
 
 
 @dataclass(frozen=True)
@@ -263,8 +259,9 @@ class Tolerances:
 
 SECTIONS: dict[str, type] = {
     "cycloid": Cycloid, "modification": Modification, "stage1": Stage1, "carrier": Carrier,
-    "disc": Disc, "crankshaft": Crankshaft, "material": Material, "operation": Operation,
-    "dynamics": Dynamics, "errors": Errors, "tolerances": Tolerances,
+    "disc": Disc, "crankshaft": Crankshaft, "housing": Housing, "material": Material,
+    "operation": Operation, "dynamics": Dynamics, "joints": Joints, "main_bearings": MainBearings,
+    "errors": Errors, "tolerances": Tolerances,
 }
 OPTIONAL_SECTIONS = ("errors", "tolerances")
 
@@ -278,9 +275,12 @@ class ReducerCase:
     carrier: Carrier
     disc: Disc
     crankshaft: Crankshaft
+    housing: Housing
     material: Material
     operation: Operation
     dynamics: Dynamics
+    joints: Joints
+    main_bearings: MainBearings
     errors: Errors = Errors()
     tolerances: Tolerances = Tolerances()
     source: str = ""   # path the case was read from, for messages
@@ -313,10 +313,6 @@ class ReducerCase:
     def to_dict(self) -> dict:
         """The content the case fingerprint hashes: every section but `tolerances` (see Tolerances)."""
         return {k: v for k, v in dataclasses.asdict(self).items() if k not in ("source", "tolerances")}
-
-
-def _where(section: str, key: str, source: str) -> str:
-    return f"{source + ': ' if source else ''}[{section}] {key}"
 
 
 def _build(cls: type, data: dict, section: str, source: str) -> Any:
@@ -489,11 +485,34 @@ def validate(case: ReducerCase) -> ReducerCase:
         raise CaseError(f"{w('operation', 'momentary_torque_Nm')} = {op.momentary_torque_Nm:g}: the momentary "
                         f"maximum must exceed the rated torque ({op.rated_torque_Nm:g} N m); allowed > "
                         f"{op.rated_torque_Nm:g}")
+    _check_housing(case)
     _check_errors(case)
-    _check_backlash(case)
+    clearance_limits.check(case)
+    bad = params_assembly.check(case.joints, case.main_bearings, w)
+    if bad:
+        raise CaseError(bad[0])
     _check_undercut(case)
     _check_stage1(case)
     return case
+
+
+def _check_housing(case: ReducerCase) -> None:
+    """Ring wall outside the grooves, as long as the disc stack; bolt holes apart, between wall and rim."""
+    h, c, r = case.housing, case.cycloid, case.housing.bolt_hole_radius_mm
+    groove, stack, b = c.pin_circle_radius_mm + c.pin_radius_mm, c.disc_count * c.width_mm, h.bolt_circle_radius_mm
+    gap = b * math.sin(math.pi / h.bolt_count)
+    for key, ok, why in (("pin_ring_outer_radius_mm", h.pin_ring_outer_radius_mm > groove, f"the wall must lie outside "
+                          f"the groove bottoms (pin circle + pin radius); allowed > {groove:g}"),
+                         ("pin_ring_length_mm", h.pin_ring_length_mm >= stack, f"the pin ring must span the disc "
+                          f"stack (disc_count x width); allowed >= {stack:g}"),
+                         ("bolt_circle_radius_mm", b - r > h.pin_ring_outer_radius_mm, f"the bolt holes (radius {r:g} "
+                          f"mm) cut the ring wall; allowed > {h.pin_ring_outer_radius_mm + r:g}"),
+                         ("flange_outer_radius_mm", h.flange_outer_radius_mm > b + r, f"the bolt holes reach the "
+                          f"flange rim; allowed > {b + r:g} (bolt circle + hole radius)"),
+                         ("bolt_hole_radius_mm", r < gap, f"{h.bolt_count} holes on the {b:g} mm circle overlap; "
+                          f"allowed < {gap:.4g}")):
+        if not ok:
+            raise CaseError(f"{_where('housing', key, case.source)} = {getattr(h, key):g}: {why}")
 
 
 def _check_stage1(case: ReducerCase) -> None:
@@ -517,15 +536,6 @@ def _check_stage1(case: ReducerCase) -> None:
     if eps < 1.0:
         raise CaseError(f"{where} = {x!r}: transverse contact ratio {eps:.3f} < 1 (the mesh would lose "
                         f"contact between pairs); lower |x1| or use more teeth")
-
-
-def _check_backlash(case: ReducerCase) -> None:
-    """The closed-form backlash and interference of the modified profile within their limits."""
-    c, m, e = case.cycloid, case.modification, case.errors
-    key, why = clearance_limits.problem(c.eccentricity_mm, c.zc, c.zp, c.pin_circle_radius_mm, m.offset_mm,
-                                        m.equidistant_mm, e.pin_circle_radius_um, e.pin_radius_um)
-    if why:
-        raise CaseError(f"{_where(*key, case.source)} = {getattr(getattr(case, key[0]), key[1]):g}{why}")
 
 
 def _check_undercut(case: ReducerCase) -> None:

@@ -276,12 +276,13 @@ def _load_sharing(model, out: Path, points: int = 41) -> None:
 
 
 def cmd_hysteresis(args) -> int:
-    from dynamics.budget import against_reference, compliance_budget
+    from dynamics.budget import against_reference, compliance_budget, rigidity_band
     from dynamics.catalog import hysteresis
     from pipeline.figures import hysteresis_loop
     model, spath = _model(args)
     res = hysteresis(model)
     budget = compliance_budget(model)
+    band = rigidity_band(model, lambda m: hysteresis(m).torsional_rigidity_Nm_per_arcmin)
     ref = against_reference(res.torsional_rigidity_Nm_per_arcmin,
                             model.case.operation.reference_rigidity_Nm_per_arcmin, budget["compliance_budget"])
     out = Path(args.out)
@@ -293,6 +294,7 @@ def cmd_hysteresis(args) -> int:
                                                 "tangent_rigidity_at_rated_Nm_per_arcmin":
                                                     budget["tangent_rigidity_Nm_per_arcmin"],
                                                 "reference": ref,
+                                                "rigidity_band": band,
                                                 "made_from": _made_from(model, "rv-hysteresis/1").to_json()})
     buf = io.StringIO()
     np.savetxt(buf, np.column_stack([res.torque_Nm, res.output_angle_arcmin]), delimiter=",",
@@ -307,6 +309,9 @@ def cmd_hysteresis(args) -> int:
     _plot_budget(budget, model.case.name, out / "compliance_budget.png")
     _say(args, f"hysteresis: {out}/hysteresis.json: rigidity {res.torsional_rigidity_Nm_per_arcmin:.1f} "
                f"N m/arcmin, lost motion {res.lost_motion_arcmin:.3f} arcmin, backlash {res.backlash_arcmin:.3f} arcmin")
+    for name, b in band.items():
+        _say(args, f"rigidity band ({name}: compliance x {b['factors'][0]:.2f} .. x {b['factors'][1]:.2f}): "
+                   f"{b['rigidity_Nm_per_arcmin'][0]:.1f} .. {b['rigidity_Nm_per_arcmin'][1]:.1f} N m/arcmin")
     top = sorted(budget["compliance_budget"].items(), key=lambda kv: -kv[1])
     _say(args, "compliance budget at rated torque: " + ", ".join(
         f"{k} {100 * v:.1f} %" for k, v in top if v >= 0.005) + " (components under 0.5 % omitted)")

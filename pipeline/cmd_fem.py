@@ -123,6 +123,9 @@ def _case(args, out: Path) -> int:
     stiffness.save(dataclasses.replace(runres.model, made_from=prov), out / "stiffness.json")
     _write_meshes(runres, out)
     _pictures(runres, out)
+    if "housing_fe" in runres.artifacts:
+        from pipeline.housing_figure import housing_png
+        housing_png(case, out / "housing.png", runres.artifacts["housing_fe"])
     if not args.quiet:
         print(summary_line(runres.model, time.perf_counter() - t0, out / "stiffness.json"))
     return 0

@@ -221,3 +221,67 @@ def load_sharing(path, pin_angle_deg: np.ndarray, pin_force_N: np.ndarray, cycle
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     save_figure(fig, path)
+
+
+def housing_section(path, points_m: np.ndarray, triangles: np.ndarray, displacement_m: np.ndarray,
+                    von_mises_Pa: np.ndarray, pin_xy_m: np.ndarray, pin_force_N: np.ndarray, bolt_xy_m: np.ndarray,
+                    bolt_radius_m: float, radial_stiffness_N_per_m: np.ndarray, lobes: dict, *, title: str,
+                    datum_stiffness_N_per_m: np.ndarray | None = None) -> None:
+    """The housing section (fem.housing): von Mises on the deformed mesh under one disc's pin forces
+    (displacements magnified), a zoom on the most loaded grooves with the mesh, and the per-pin
+    radial stiffness around the ring with its Fourier lobes (and, when given, that of the datum
+    one pin pitch behind each groove: the housing beyond the groove law)."""
+    import matplotlib.tri as mtri
+    from matplotlib.patches import Circle
+    p, u = points_m * 1e3, displacement_m * 1e3
+    umax = float(np.abs(u).max()) or 1.0
+    scale = 0.04 * float(np.ptp(p[:, 0])) / umax
+    fig, axes = figure(1, 3, figsize=(18, 6.2), gridspec_kw={"width_ratios": [1.1, 1.0, 1.1]})
+    tri = mtri.Triangulation(*(p + scale * u).T, triangles)
+    fmax = float(np.hypot(*pin_force_N.T).max()) or 1.0
+    k_hot = int(np.argmax(np.hypot(*pin_force_N.T)))
+    for ax, zoom in ((axes[0], False), (axes[1], True)):
+        pc = ax.tripcolor(tri, facecolors=von_mises_Pa / 1e6, cmap="viridis", edgecolors="0.3" if zoom else "none",
+                          linewidth=0.1)
+        for b in bolt_xy_m:
+            ax.add_patch(Circle(b * 1e3, bolt_radius_m * 1e3, color="#c0392b", alpha=0.6))
+        arrow = (0.03 if zoom else 0.08) * float(np.ptp(p[:, 0])) / fmax     # force on the housing, ending at the pin
+        for xy, f in zip(pin_xy_m * 1e3, pin_force_N):
+            if np.hypot(*f) > 0:
+                ax.annotate("", xy=xy, xytext=xy - arrow * f,
+                            arrowprops=dict(arrowstyle="-|>", color="#e67e22", lw=1.2, mutation_scale=10))
+        ax.set_aspect("equal")
+        if zoom:
+            c = pin_xy_m[k_hot] * 1e3
+            span = 4.0 * np.hypot(*(pin_xy_m[1] - pin_xy_m[0])) * 1e3
+            ax.set_xlim(c[0] - span, c[0] + span)
+            ax.set_ylim(c[1] - span, c[1] + span)
+            ax.set_title("most loaded grooves, mesh (P2 triangles)")
+        else:
+            ax.set_title(f"von Mises [MPa], displacement x {scale:.3g}")
+        ax.set_xlabel("x [mm]")
+        ax.set_ylabel("y [mm]")
+        fig.colorbar(pc, ax=ax, shrink=0.8, label="von Mises [MPa]")
+    ax = axes[2]
+    ang = np.degrees(np.arctan2(pin_xy_m[:, 1], pin_xy_m[:, 0])) % 360
+    order = np.argsort(ang)
+    k = radial_stiffness_N_per_m / 1e6
+    ax.plot(ang[order], k[order], "o-", color="#1b9e77", ms=4, label="seat (groove surface)")
+    ax.axhline(float(k.mean()), color="0.5", lw=0.8, ls="--", label=f"seat mean {k.mean():.0f} N/um")
+    if datum_stiffness_N_per_m is not None:
+        kd = datum_stiffness_N_per_m / 1e6
+        ax.plot(ang[order], kd[order], "s-", color="#7570b3", ms=3, lw=0.8,
+                label=f"datum one pin pitch behind (mean {kd.mean():.0f} N/um)")
+    for b in np.degrees(np.arctan2(bolt_xy_m[:, 1], bolt_xy_m[:, 0])) % 360:
+        ax.axvline(b, color="#c0392b", lw=0.6, alpha=0.5)
+    ax.plot([], [], color="#c0392b", lw=0.6, label="bolt angles")
+    big = sorted(((m, v) for m, v in lobes.items() if v > 1e-4), key=lambda kv: -kv[1])[:4]
+    text = ", ".join(f"m={m}: {100 * v:.2f} %" for m, v in big) or "none above 0.01 %"
+    ax.set_title(f"per-pin radial stiffness; seat lobes (of the mean) {text}", fontsize=9)
+    ax.set_xlabel("pin angle [deg]")
+    ax.set_ylabel("radial stiffness [N/um]")
+    ax.grid(True, lw=0.3)
+    ax.set_yscale("log")
+    ax.legend(loc="center right", fontsize=8)
+    fig.suptitle(title)
+    save_figure(fig, path)
