@@ -173,7 +173,7 @@ def read_record(path: str | Path, columns: dict[str, str | int] | None = None,
         k = cuts[0]
         raise RecordError(f"{path}: row {linenos[k]}: the motion reverses (output "
                           f"{a_out[k] - a_out[0]:+.2f} deg, then {a_out[-1] - a_out[k]:+.2f} deg); a record "
-                          f"runs one direction: split it there (diagnose does: dynamics.records.read_records)")
+                          f"runs one direction: split it there (diagnose --split-reversals does)")
     _check_travel(path, linenos, a_out)
     return BenchRecord(str(path), t, a_in, a_out, torque, tuple(comments), extra)
 

@@ -282,7 +282,7 @@ def two_level_pcg(K: sp.csr_matrix, Q: sp.csr_matrix, F: np.ndarray, *, rtol: fl
         rz_new = np.einsum("ij,ij->j", R, Z)
         P = Z + np.where(active, rz_new / np.where(rz == 0, 1.0, rz), 0.0) * P
         rz = rz_new
-    raise RuntimeError(f"carrier PCG did not converge in {maxiter} iterations")
+    raise MeshError(f"carrier FE did not converge in {maxiter} iterations: check [carrier] pillar and plate sizes")
 
 
 def _p1_coarse_space(basis, mesh_sk, T: sp.csr_matrix, keep: np.ndarray, n_rings: int) -> sp.csr_matrix:

@@ -34,6 +34,12 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     try:
         yield Path(tmp)
         os.replace(tmp, path)
+    except OSError as exc:
+        # a write error (ENOSPC, EIO, EDQUOT) names no file or only the temporary: name the artifact,
+        # so the CLI prints one `error:` line; the previous artifact at `path` is untouched
+        if exc.filename is None or os.fspath(exc.filename) == tmp:
+            raise OSError(exc.errno, exc.strerror or str(exc), os.fspath(path)) from None
+        raise
     finally:
         Path(tmp).unlink(missing_ok=True)
 

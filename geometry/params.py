@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from geometry import params_assembly, spur
+from geometry import clearance_limits, params_assembly, spur
 from geometry.artifacts import read_text
 from geometry.case_fields import CaseError, ranged as _f, where as _where
 from geometry.case_si import CaseSI, case_si
@@ -497,6 +497,7 @@ def validate(case: ReducerCase) -> ReducerCase:
                         f"{op.rated_torque_Nm:g}")
     _check_housing(case)
     _check_errors(case)
+    clearance_limits.check(case)
     bad = params_assembly.check(case.joints, case.main_bearings, w)
     if bad:
         raise CaseError(bad[0])

@@ -13,7 +13,7 @@ import signal
 import sys
 
 from geometry.artifacts import InputError
-from pipeline import checks
+from pipeline import checks, runlock
 
 # Sub-command -> the module that registers it. Only the module of the command asked for is
 # imported (CadQuery, numba, scikit-fem take seconds to import), so `--help` and errors stay quick.
@@ -86,6 +86,7 @@ def _on_signal(signum, frame):
         child.join(timeout=5)
     if args is not None:
         _clear_temps(args)
+    runlock.release(_RUN.get("lock"))
     try:    # the main thread may have been stopped inside a write to these very streams
         sys.stdout.flush()
         print(INTERRUPTED, file=sys.stderr, flush=True)
@@ -94,16 +95,21 @@ def _on_signal(signum, frame):
     os._exit(128 + signum)
 
 
-def _check_output(args) -> None:
-    """Refuse an unusable --out before anything runs, then clear what a killed run left there."""
+def _check_output(args) -> tuple | None:
+    """Refuse an unusable --out before anything runs, take the output's run lock (pipeline.runlock:
+    a second run on the same output waits for it), then clear what a killed run left there. Returns
+    the lock (None without --out)."""
     out = getattr(args, "out", None)
     if out is None:
-        return
+        return None
     if args.command in FILE_OUTPUT:
         path = checks.out_file("--out", out)
-        checks.remove_stale_temps(path.parent, target=path.name)
+        folder, target = path.parent, path.name
     else:
-        checks.remove_stale_temps(checks.out_folder("--out", out))
+        folder, target = checks.out_folder("--out", out), None
+    lock = runlock.acquire(out, f"python -m pipeline {args.command}", os.fspath(out))
+    checks.remove_stale_temps(folder, target=target)
+    return lock
 
 
 def _clear_temps(args) -> None:
@@ -123,13 +129,13 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signal.SIGTERM, _on_signal)
         signal.signal(signal.SIGINT, _on_signal)
     words = sys.argv[1:] if argv is None else argv
-    args = None
+    args, lock = None, None
     try:
         parser = build_parser(next((w for w in words if not w.startswith("-")), None))
         args = parser.parse_args(argv)
-        _check_output(args)
+        lock = _check_output(args)
         if argv is None:
-            _RUN.update(args=args, pid=os.getpid())
+            _RUN.update(args=args, pid=os.getpid(), lock=lock)
         return int(args.func(args) or 0)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -145,3 +151,5 @@ def main(argv: list[str] | None = None) -> int:
         print(INTERRUPTED, file=sys.stderr)
         signum = exc.args[0] if exc.args and isinstance(exc.args[0], int) else signal.SIGINT
         return 128 + int(signum)
+    finally:
+        runlock.release(lock)

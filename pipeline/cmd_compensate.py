@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 
 from geometry.artifacts import InputError, read_json
@@ -82,6 +83,8 @@ def run(args) -> int:
     from dynamics.records import read_records
     from pipeline.diagnosis.inputs import check_records
     records, notes = check_records(case, [r for p in args.check or [] for r in read_records(p)])
+    for note in notes:      # repairs of the checked records (dynamics.record_checks): said at once
+        print(f"warning: {note}", file=sys.stderr)
     levels = _levels(args.torques_Nm, case, records)
     stiffness = for_case(case, args.stiffness)
     from pipeline.diagnosis import compensate as comp

@@ -3,9 +3,11 @@
 Writes DIR/diagnosis.json (DESIGN.md keys) and DIR/index.html. Stiffness defaults to
 build/<case.name>/fem/stiffness.json. `--columns NAME=SOURCE,...` (and `--no-header`) read records
 with other column names or none; nothing is guessed. A file whose motion reverses (forward then
-backward) is split into one record per direction (dynamics.records.read_records). Records are
-checked against the case before any fitting (pipeline.diagnosis.inputs: a refused record is one
-`error:` line, exit 2). `--holdout R ...`: records never used to name or fit a cause; holdout_gain is computed on exactly
+backward) is refused, or with `--split-reversals` split into one record per direction
+(dynamics.records.read_records). Records are checked against the case before any fitting
+(pipeline.diagnosis.inputs, dynamics.record_checks: a refused record is one `error:` line, exit 2;
+a repaired one a `warning:` line on stderr, even with --quiet, and a line of diagnosis.json's
+`notes`). `--holdout R ...`: records never used to name or fit a cause; holdout_gain is computed on exactly
 them. Progress (one tick per record simulated through the model, on stderr, only on a terminal),
 the diagnosis notes (input repairs, causes not reported and why, residual left unexplained; one
 `note:` line each on stderr, also in index.html) and a one-line summary (stdout) are shown unless
@@ -34,6 +36,8 @@ def register(sub) -> None:
     p.add_argument("--stiffness", default=None, help="stiffness.json (default build/<case>/fem/stiffness.json)")
     p.add_argument("--columns", default=None, help="column map NAME=SOURCE,... (SOURCE a name or 0-based index)")
     p.add_argument("--no-header", action="store_true", help="records have no header row (needs --columns)")
+    p.add_argument("--split-reversals", action="store_true",
+                   help="split a record whose motion reverses into one record per direction (default: refuse it)")
     p.add_argument("--points-per-rev", type=int, default=1024, help="simulated points per output revolution")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary line")
     p.set_defaults(func=run)
@@ -86,14 +90,21 @@ def run(args) -> int:
     from pipeline.diagnosis.diagnose import diagnose
     from pipeline.diagnosis.report import write_report
     from pipeline.diagnosis.simulate import quasi_static_te
-    from dynamics.records import parse_column_map, read_records
+    from dynamics.records import parse_column_map, read_record, read_records
+    from pipeline.diagnosis.inputs import check_records
     stiffness = for_case(case, args.stiffness)
     cols = parse_column_map(args.columns) if args.columns else None
     _check_holdout(args.measured, args.holdout)
-    records = [r for p in args.measured for r in read_records(p, cols, header=not args.no_header)]
-    held = [r for p in (args.holdout or []) for r in read_records(p, cols, header=not args.no_header)]
+
+    def read(p):
+        return read_records(p, cols, header=not args.no_header) if args.split_reversals else \
+            [read_record(p, cols, header=not args.no_header)]
+    records = [r for p in args.measured for r in read(p)]
+    held = [r for p in (args.holdout or []) for r in read(p)]
     holdout = tuple(range(len(records), len(records) + len(held))) if args.holdout else None
-    records += held
+    records, warnings = check_records(case, records + held)   # before the heavy work: said at once
+    for w in warnings:
+        print(f"warning: {w}", file=sys.stderr)
     te_model, bar = quasi_static_te, None
     if not args.quiet and sys.stderr.isatty():   # a bar in a log file is one line of carriage returns
         from tqdm import tqdm
@@ -105,10 +116,12 @@ def run(args) -> int:
     finally:
         if bar is not None:
             bar.close()
+    import dataclasses
+    diag = dataclasses.replace(diag, notes=tuple(warnings) + tuple(n for n in diag.notes if n not in warnings))
     _add_made_from(Path(args.out) / "diagnosis.json", case, stiffness, args.measured + (args.holdout or []))
     out = write_report(diag, case, args.out)
     if not args.quiet:
-        for note in diag.notes:
+        for note in diag.notes[len(warnings):]:
             print(f"note: {note}", file=sys.stderr)
         print(summary_line(diag, out))
     return 0

@@ -64,7 +64,8 @@ def cmd_simulate(args) -> int:
         f"speed {res.meta['input_speed_rpm']:g} rpm, {'backward' if args.backward else 'forward'}",
         f"stiffness {spath}; dt {res.meta['dt_s']:g} s; {res.meta['solver']}",
         f"made_from: case {made.case_fingerprint}, stiffness {dict(made.inputs)['stiffness']}",
-        "encoder_zero: simulation (TE = 0 at the unloaded kinematic zero)"])
+        "encoder_zero: simulation (TE = 0 at the unloaded kinematic zero)",
+        f"input_speed_rpm: {res.meta['input_speed_rpm']:g}"])   # the condition, checked by diagnose
     _say(args, f"simulate: {args.out}: {res.t_s[-1]:.3g} s simulated in {wall:.1f} s, " + _sigma_text(res))
     return 0
 

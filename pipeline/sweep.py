@@ -5,13 +5,22 @@ change what they return; results come back in task order. An interrupt (Ctrl-C, 
 into KeyboardInterrupt by the CLI) or a failing task stops the sweep at once: pending tasks are
 cancelled and local workers terminated, instead of running every remaining task first. Tasks that
 write their own artifacts (the load matrix) keep what finished, so a rerun resumes.
+
+A worker that dies mid-sweep (killed, out of memory) costs nothing but time: its tasks run again,
+and being pure they return what they would have (the results equal an undisturbed run's). Locally
+the pool is rebuilt and the unfinished tasks resubmitted, at most ALLOWED_FAILURES times; on Dask
+the scheduler reschedules them (its `allowed-failures`, 3 by default). A task that keeps killing
+its worker, or a cluster left without workers for NO_WORKER_TIMEOUT_S, ends the sweep with one
+SweepError line naming the task (its index, function and arguments).
 """
 from __future__ import annotations
 
 import os
 import re
 import signal
+import time
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable, Iterable, Sequence
 
 from geometry.artifacts import InputError
@@ -19,8 +28,29 @@ from geometry.artifacts import InputError
 _ADDRESS = re.compile(r"^((tcp|tls|ucx|ws|wss)://)?(\[[0-9A-Fa-f:.]+\]|[^\s/:\[\]]+):\d{1,5}$")
 
 
+ALLOWED_FAILURES = 3          # pool breaks (a worker died) tolerated per sweep: Dask's default
+NO_WORKER_TIMEOUT_S = 120.0   # a Dask cluster without a worker this long ends the sweep
+_POLL_S = 1.0
+
+
 class SchedulerError(InputError):
     """A --scheduler address that is malformed or where no Dask scheduler answers."""
+
+
+class SweepError(InputError):
+    """A sweep that cannot finish: a task kills its worker every time it runs, or the cluster has
+    no worker left. The message names the task."""
+
+
+def describe_task(func, tasks, k: int) -> str:
+    """'task 3 of 8 (module.func(args...))', arguments shortened: what a user can rerun alone."""
+    args = ", ".join(_short(a) for a in tasks[k])
+    return f"task {k + 1} of {len(tasks)} ({getattr(func, '__module__', '?')}.{getattr(func, '__qualname__', func)}({args}))"
+
+
+def _short(a) -> str:
+    text = repr(a)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def check_scheduler(address: str | None) -> str | None:
@@ -56,19 +86,34 @@ def _worker_init() -> None:
 
 
 def _run_local(func, tasks, workers, progress) -> list:
-    pool = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init)
-    try:
-        futures = [pool.submit(func, *t) for t in tasks]
-        out = []
-        for i, f in enumerate(futures, 1):
-            out.append(f.result())
-            if progress:
-                progress(i, len(tasks))
-    except BaseException:
-        _stop(pool)
-        raise
-    pool.shutdown()
-    return out
+    out: list = [None] * len(tasks)
+    done = [False] * len(tasks)
+    breaks, finished = 0, 0
+    while True:
+        todo = [k for k in range(len(tasks)) if not done[k]]
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(todo)), initializer=_worker_init)
+        try:
+            futures = {k: pool.submit(func, *tasks[k]) for k in todo}
+            for k in todo:                        # in order: a broken pool fails the first unfinished
+                out[k] = futures[k].result()
+                done[k] = True
+                finished += 1
+                if progress:
+                    progress(finished, len(tasks))
+        except BrokenProcessPool:
+            _stop(pool)
+            breaks += 1
+            first = next(k for k in range(len(tasks)) if not done[k])
+            if breaks > ALLOWED_FAILURES:
+                raise SweepError(f"{describe_task(func, tasks, first)}: a worker process died "
+                                 f"{breaks} times while it was unfinished (killed, out of memory, or a "
+                                 f"crash in compiled code); run it alone to see why") from None
+            continue                              # pure tasks: rerun the unfinished ones
+        except BaseException:
+            _stop(pool)
+            raise
+        pool.shutdown()
+        return out
 
 
 def _stop(pool: ProcessPoolExecutor) -> None:
@@ -95,14 +140,43 @@ def _run_dask(func, tasks, scheduler: str, progress) -> list:
                              "to run on local processes") from None
     with client:
         futures = [client.submit(func, *t, pure=False) for t in tasks]
+        index = {f.key: k for k, f in enumerate(futures)}
         try:
-            for done, _ in enumerate(as_completed(futures), 1):
-                if progress:
-                    progress(done, len(tasks))
-            return client.gather(futures)
+            _wait_dask(client, futures, progress)
+            try:
+                return client.gather(futures)
+            except Exception as exc:
+                if type(exc).__name__ != "KilledWorker":
+                    raise
+                k = next((index[f.key] for f in futures if f.status == "error"), 0)
+                raise SweepError(f"{describe_task(func, tasks, k)}: its Dask worker died every time it "
+                                 f"ran (the scheduler's allowed-failures); run it alone to see why") from None
         except BaseException:
             client.cancel(futures, force=True)   # running tasks finish on their workers, unwaited
             raise
+
+
+def _wait_dask(client, futures, progress) -> None:
+    """Wait for every future, ticking progress; a cluster without workers for NO_WORKER_TIMEOUT_S
+    raises SweepError naming the first unfinished task (as_completed alone would wait forever)."""
+    from distributed import wait
+    pending, finished, idle_since = set(futures), 0, None
+    while pending:
+        try:
+            done, pending = wait(list(pending), timeout=_POLL_S, return_when="FIRST_COMPLETED")
+        except TimeoutError:
+            done = set()
+        finished += len(done)
+        if done and progress:
+            progress(finished, len(futures))
+        if done or client.scheduler_info().get("workers"):
+            idle_since = None
+            continue
+        idle_since = idle_since or time.monotonic()
+        if time.monotonic() - idle_since > NO_WORKER_TIMEOUT_S:
+            k = next(k for k, f in enumerate(futures) if f in pending)
+            raise SweepError(f"task {k + 1} of {len(futures)} unfinished: the Dask cluster at "
+                             f"{client.scheduler.address} has had no worker for {NO_WORKER_TIMEOUT_S:g} s")
 
 
 def chunks(items: Iterable, n: int) -> list[list]:

@@ -17,7 +17,7 @@ from pipeline.diagnosis.simulate import quasi_static_te
 support = pytest.importorskip("support", reason="tests/support.py (stiffness stand-in) not present")
 ROOT = Path(__file__).parents[1]
 MEASURED = Path(__file__).resolve().parents[2] / "shared" / "measured"
-KEYS = {"cause", "findings", "baseline", "extension"}
+KEYS = {"cause", "findings", "baseline", "extension", "notes"}
 
 
 def test_cli_writes_exact_keys_and_an_offscreen_page(tmp_path, capsys):

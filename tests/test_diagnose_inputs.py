@@ -156,12 +156,16 @@ def test_a_record_of_another_ratio_is_refused_in_one_line():
         check_records(CASE, [other])
 
 
-def test_time_in_milliseconds_is_converted_with_a_note():
+def test_time_in_milliseconds_is_converted_when_the_record_states_its_speed():
     r = _toy([], 29, torque_fractions=(0.1,), speed_rpm=CASE.operation.input_speed_rpm)[0]
     ms = _replace(r, time_s=r.time_s * 1000.0)
-    (back,), notes = check_records(CASE, [ms])
+    # without a stated speed, 1/1000 of the case's speed is ambiguous (ms, or a slow run): refused
+    with pytest.raises(RecordError, match=r"1/1000 of the case's 1200 rpm: time_s looks like milliseconds"):
+        check_records(CASE, [ms])
+    said_ms = _replace(ms, comments=("input_speed_rpm: 1200",))
+    (back,), notes = check_records(CASE, [said_ms])
     assert back.input_speed_rpm == pytest.approx(CASE.operation.input_speed_rpm, rel=1e-6)
-    assert len(notes) == 1 and "milliseconds" in notes[0]
+    assert len(notes) == 1 and "time_s read as milliseconds" in notes[0] and "converted to seconds" in notes[0]
     # a stated speed that disagrees otherwise is refused; one that says seconds keeps them
     said = _replace(ms, comments=("input_speed_rpm: 700",))
     with pytest.raises(RecordError, match="input_speed_rpm 700; they must agree"):
@@ -171,7 +175,7 @@ def test_time_in_milliseconds_is_converted_with_a_note():
     assert notes == [] and kept.time_s[-1] == ms.time_s[-1]
 
 
-def test_an_encoder_glitch_is_found_reported_and_masked():
+def test_an_encoder_glitch_is_found_reported_and_repaired():
     eff = draw_effect(np.random.default_rng(30), CASE, "output_coaxiality")
     clean = _toy([eff], 30)
     out = clean[2].output_angle_deg.copy()
@@ -203,14 +207,21 @@ def _write(tmp_path, name, t, a_in, a_out, T, comments=()):
     return p
 
 
-def test_a_time_gap_is_no_wrapped_angle_and_is_said(tmp_path):
+def test_a_time_gap_is_no_wrapped_angle_and_is_resampled_within_its_limit(tmp_path):
     r = _toy([], 32, torque_fractions=(0.1,), samples_per_rev=512)[0]
-    keep = np.r_[0:200, 260:len(r.time_s)]               # 60 samples missing: 42 deg of output
+    keep = np.r_[0:200, 208:len(r.time_s)]               # 8 samples missing: 5.6 deg of output < 360/zp
     p = _write(tmp_path, "gap.csv", r.time_s[keep], r.input_angle_deg[keep], r.output_angle_deg[keep],
                r.output_torque_Nm[keep])
     rec = read_record(p)                                   # was: "the angle is wrapped"
-    _, notes = check_records(CASE, [rec])
-    assert len(notes) == 1 and "time gap" in notes[0] and "42" in notes[0]
+    (fixed,), notes = check_records(CASE, [rec])
+    assert len(notes) == 1 and "8 samples missing" in notes[0] and "between samples 199 and 200" in notes[0]
+    assert len(fixed.time_s) == len(r.time_s)              # back on the record's clock
+    assert fixed.output_angle_deg == pytest.approx(r.output_angle_deg, abs=1e-3)   # linear over 5.6 deg
+    far = np.r_[0:200, 260:len(r.time_s)]                  # 60 missing: 42 deg, more than one crank period
+    rec = read_record(_write(tmp_path, "gap2.csv", r.time_s[far], r.input_angle_deg[far],
+                             r.output_angle_deg[far], r.output_torque_Nm[far]))
+    with pytest.raises(RecordError, match=r"gap2.csv: a time gap spans 42.\d deg of output .* up to 9 deg"):
+        check_records(CASE, [rec])
 
 
 def test_a_forward_then_backward_file_is_split_or_refused_with_its_reason(tmp_path):

@@ -1,7 +1,8 @@
 """Diagnosis of bench records against the model: residual, causes, extension, gain.
 
 diagnose(case, stiffness, records) runs blind on the records (conditions read from each record):
-  0. input checks (inputs.py): ratio, time unit, encoder glitches (masked), time gaps; refused
+  0. input checks (inputs.py, dynamics.record_checks): ratio, time unit, stated torque, encoder
+     glitches and missing samples (repaired), wind-up against the torque column; refused
      records raise RecordError (one line), repairs and doubts become notes;
   1. simulate each record (simulate.py), residual = measured TE - simulated TE;
   2. one free offset per encoder-zero group (zeros.py) is removed in every RMS reported;
@@ -82,7 +83,8 @@ class Diagnosis:
                              for f in self.findings],
                 "baseline": {"residual_rms_arcsec": self.residual_rms_arcsec,
                              "residual_pp_arcsec": self.residual_pp_arcsec},
-                "extension": ext}
+                "extension": ext,
+                "notes": list(self.notes)}   # input repairs (warnings), causes not reported, residual left
 
 
 def holdout_split(records, groups) -> tuple[list[int], list[int]]:
