@@ -33,7 +33,8 @@ from pipeline.diagnosis.inputs import check_records
 from pipeline.diagnosis.orders import spectrum_of
 from pipeline.diagnosis.signatures import SignatureSummary, signature_columns, summarise
 from pipeline.diagnosis.significance import Line, noise_floor_arcsec, test_lines
-from pipeline.diagnosis.simulate import TEModel, quasi_static_te, simulate_record
+from pipeline.diagnosis.simulate import (TEModel, default_points_per_rev, max_order as order_limit, quasi_static_te,
+                                         simulate_record)
 from pipeline.diagnosis.unexplained import torque_sign_notes, unexplained
 from pipeline.diagnosis.zeros import group_records, offset_columns, remove_offsets, rms
 
@@ -112,13 +113,14 @@ def _feature_orders(summaries, max_order: int, max_count: int = 24) -> tuple[int
 
 
 def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = quasi_static_te, *,
-             points_per_rev: int = 1024, p_enter: float = 1e-3, p_line: float = 1e-3,
+             points_per_rev: int | None = None, p_enter: float = 1e-3, p_line: float = 1e-3,
              max_nfev: int = 8, holdout: bool = True, holdout_records: tuple[int, ...] | None = None
              ) -> Diagnosis:
     """`holdout_records`: indices of records given to hold out (`diagnose --holdout`): never used to
     name or fit a cause, the hold-out gain is computed on exactly them; otherwise `holdout` applies
     the module's hold-out rule (those records help name the causes, never fit their parameters)."""
     records, notes = check_records(case, list(records))
+    points_per_rev = default_points_per_rev(case) if points_per_rev is None else int(points_per_rev)
     notes += torque_sign_notes(records)
     groups = group_records(records)
     by_id = {c.id: c for c in registry.CAUSES}   # read now: a cause registered at runtime counts
@@ -132,7 +134,7 @@ def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = qu
     resid = [m - s for m, s in zip(meas, sim0)]
     before = remove_offsets(resid, groups)
     noise = noise_floor_arcsec(records, before)
-    max_order = int(min(4 * case.cycloid.zp, points_per_rev // 2 - 1))
+    max_order = int(min(order_limit(case), points_per_rev // 2 - 1))
     n = len(records)
     if holdout_records is not None:
         hold_idx = sorted(set(int(k) for k in holdout_records))
