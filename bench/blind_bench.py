@@ -224,10 +224,9 @@ def main() -> int:
         print(f"blind: {name}: {what} -> {'PASS' if ok else 'FAIL'} ({wall:.0f} s)", flush=True)
     (args.out / "blind.json").write_text(json.dumps(rows, indent=1, default=float))
     md = ["| set | expected | named | extension | gain | hold-out | pass |", "|---|---|---|---|---|---|---|"]
-    md += [f"| {r['set']} | {r['expected']} | {r['cause']} | {'+'.join(r['causes'] or [])} | "
-           f"{'' if r['gain'] is None else f'{r['gain']:.3f}'} | "
-           f"{'' if r['holdout_gain'] is None else f'{r['holdout_gain']:.3f}'} | {'yes' if r['pass'] else 'NO'} |"
-           for r in rows]
+    fmt = lambda v: "" if v is None else f"{v:.3f}"  # noqa: E731
+    md += [f"| {r['set']} | {r['expected']} | {r['cause']} | {'+'.join(r['causes'] or [])} | {fmt(r['gain'])} | "
+           f"{fmt(r['holdout_gain'])} | {'yes' if r['pass'] else 'NO'} |" for r in rows]
     (args.out / "blind.md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
     return 0 if all(r["pass"] for r in rows) else 1

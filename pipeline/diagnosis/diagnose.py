@@ -74,7 +74,9 @@ class Diagnosis:
         ext = None
         if self.extension is not None:
             e = self.extension
-            params = {**e.parameters, "model_parameters": e.model_parameters} if e.model_parameters else e.parameters
+            params = {**e.parameters, "model_parameters": e.model_parameters} if e.model_parameters else dict(e.parameters)
+            if e.beyond_range:
+                params["beyond_stated_range"] = dict(e.beyond_range)
             ext = {"causes": list(e.causes), "parameters": params,
                    "residual_rms_arcsec": e.residual_rms_arcsec, "gain": e.gain,
                    "holdout_gain": e.holdout_gain}
@@ -158,9 +160,12 @@ def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = qu
                                                       {c.cause: c for c in lib.fit_cols}, fit_idx, hold_idx,
                                                       max_nfev)
         notes += ext_notes
+    beyond = (extension.beyond_range or {}) if extension is not None else {}
     findings = _findings(result, lambda s: by_id[s.cause].evidence(
         Evidence(s, case, tuple(records[k] for k in named), tuple(groups[k] for k in named),
-                 tuple(before[k] for k in named), summ[s.cause], stiffness)), set(dropped))
+                 tuple(before[k] for k in named), summ[s.cause], stiffness))
+        + (f" Held at its bound: {beyond[s.cause]}; the rest is unexplained." if s.cause in beyond else ""),
+        set(dropped))
     notes += unexplained(case, records, groups, after if after is not None else before, noise,
                          explained=extension is not None)
     return Diagnosis(findings[0].cause if findings else None, tuple(findings), rms(before),

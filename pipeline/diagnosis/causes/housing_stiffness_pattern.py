@@ -26,7 +26,7 @@ class HousingStiffnessPattern(LobeCause):
     description = "pin support (groove, housing) stiffness varying around the ring in m lobes"
     signature = "m zc x lines (even m) absent at zero torque, growing with it"
     unit_size = 0.1
-    harmonics = (2,)
+    harmonics = (2, 4)
     bound = 0.6
     param_prefix, param_unit, report_unit = "housing_stiffness", "1", "fraction"
     errors_field = "pin_stiffness_lobes"
