@@ -174,10 +174,10 @@ def periodic_grid_deg(case, points_per_rev: int, direction: int) -> np.ndarray:
     return direction * np.arange(points_per_rev) * (360.0 * case.ratio / points_per_rev)
 
 
-def trig_interp(grid_values: np.ndarray, phase: np.ndarray, upsample: int = 16) -> np.ndarray:
+def trig_interp(grid_values: np.ndarray, phase: np.ndarray, upsample: int = 64) -> np.ndarray:
     """Trigonometric interpolation of one period sampled uniformly (grid_values[k] at phase k / n)
-    at phases in [0, 1): zero-padded FFT to upsample x n points, then linear interpolation
-    (relative error < (pi k / (upsample n))^2 / 8 at order k: 3e-4 at the Nyquist order)."""
+    at any phase (periodic): zero-padded FFT to upsample x n points, then linear interpolation
+    (error <= (2 pi k / (upsample n))^2 / 8 of a line at order k: 3e-4 at the Nyquist order)."""
     n = len(grid_values)
     c = np.fft.rfft(grid_values)
     m = upsample * n
