@@ -251,11 +251,13 @@ def quasi_static(model: ReducerModel, input_angle_deg, torque_Nm, direction: int
     carrier = np.empty(n)
     pf = np.zeros((n, model.n_disc, model.case.cycloid.zp))
     w = model.work()
-    q = None
+    q, nom_prev = None, None
     for i in range(n):
         # warm start: rigid-body advance of the last solution (the solver falls back to the
         # touching kinematic pose and torque continuation when the step is too large for it)
-        guess = None if q is None else q + nominal_q(model, th[i]) - nominal_q(model, th[i - 1])
+        nom = nominal_q(model, th[i])
+        guess = None if q is None else q + nom - nom_prev
+        nom_prev = nom
         q, _ = _static(model, th[i], T[i], guess, direction, w)
         carrier[i] = q[model.i_out]
         if pin_forces:

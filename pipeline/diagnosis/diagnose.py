@@ -33,8 +33,8 @@ from pipeline.diagnosis.inputs import check_records
 from pipeline.diagnosis.orders import spectrum_of
 from pipeline.diagnosis.signatures import SignatureSummary, signature_columns, summarise
 from pipeline.diagnosis.significance import Line, noise_floor_arcsec, test_lines
-from pipeline.diagnosis.simulate import (TEModel, default_points_per_rev, max_order as order_limit, quasi_static_te,
-                                         simulate_record)
+from pipeline.diagnosis.simulate import (TEModel, default_points_per_rev, max_order as order_limit, process_pool,
+                                         quasi_static_te, simulate_records)
 from pipeline.diagnosis.unexplained import torque_sign_notes, unexplained
 from pipeline.diagnosis.zeros import group_records, offset_columns, remove_offsets, rms
 
@@ -116,11 +116,23 @@ def _feature_orders(summaries, max_order: int, max_count: int = 24) -> tuple[int
 
 def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = quasi_static_te, *,
              points_per_rev: int | None = None, p_enter: float = 1e-3, p_line: float = 1e-3,
-             max_nfev: int = 8, holdout: bool = True, holdout_records: tuple[int, ...] | None = None
-             ) -> Diagnosis:
+             max_nfev: int = 8, holdout: bool = True, holdout_records: tuple[int, ...] | None = None,
+             workers: int | None = None) -> Diagnosis:
     """`holdout_records`: indices of records given to hold out (`diagnose --holdout`): never used to
     name or fit a cause, the hold-out gain is computed on exactly them; otherwise `holdout` applies
-    the module's hold-out rule (those records help name the causes, never fit their parameters)."""
+    the module's hold-out rule (those records help name the causes, never fit their parameters).
+    `workers`: local processes solving the records' grids (default: the machine's cores; 1 = none)."""
+    pool = process_pool(workers) if getattr(te_model, "__wrapped__", te_model) is quasi_static_te else None
+    try:
+        return _diagnose(case, stiffness, records, te_model, pool, points_per_rev=points_per_rev, p_enter=p_enter,
+                         p_line=p_line, max_nfev=max_nfev, holdout=holdout, holdout_records=holdout_records)
+    finally:
+        if pool is not None:
+            pool.shutdown()
+
+
+def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_enter, p_line, max_nfev, holdout,
+              holdout_records) -> Diagnosis:
     records, notes = check_records(case, list(records))
     points_per_rev = default_points_per_rev(case) if points_per_rev is None else int(points_per_rev)
     notes += torque_sign_notes(records)
@@ -129,7 +141,7 @@ def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = qu
 
     def te_of(c, s, idx=None):
         idx = range(len(records)) if idx is None else idx
-        return [simulate_record(te_model, c, s, records[k], points_per_rev) for k in idx]
+        return simulate_records(te_model, c, s, [records[k] for k in idx], points_per_rev, pool)
 
     meas = [r.te_arcsec(case.ratio) for r in records]
     sim0 = te_of(case, stiffness)

@@ -131,6 +131,14 @@ def model_for(case, stiffness, digest: str | None = None):
     return _cached(_MODELS, key, lambda: build_model(case, stiffness))
 
 
+def _carrier_key(case, stiffness, ang: np.ndarray, T: np.ndarray, direction: int, condition) -> tuple:
+    """(cache key, the case's mechanics, stiffness digest) of one solve (module docstring)."""
+    digest = stiffness_digest(stiffness)
+    mech = _mechanics(case)
+    return ((mech, digest, hashlib.sha256(ang.tobytes() + T.tobytes()).hexdigest(), int(direction), condition),
+            mech, digest)
+
+
 def quasi_static_te(case, stiffness, input_angle_deg: np.ndarray, torque_Nm,
                     direction: int, condition: Condition | None = None) -> np.ndarray:
     """TE [arcsec] of the dynamics model's static equilibria (dynamics.model.quasi_static, TE only).
@@ -138,12 +146,9 @@ def quasi_static_te(case, stiffness, input_angle_deg: np.ndarray, torque_Nm,
     torque_Nm is the record's (signed, + resists forward rotation); quasi_static applies
     direction * its argument, so it gets direction * torque_Nm (= |T| for a steady record).
     The carrier angles are cached per mechanics (module docstring); the reading is the case's own."""
-    from dynamics.model import quasi_static
     ang = np.asarray(input_angle_deg, float)
-    T = np.broadcast_to(np.asarray(torque_Nm, float), ang.shape)
-    digest = stiffness_digest(stiffness)
-    mech = _mechanics(case)
-    key = (mech, digest, hashlib.sha256(ang.tobytes() + T.tobytes()).hexdigest(), int(direction), condition)
+    T = np.ascontiguousarray(np.broadcast_to(np.asarray(torque_Nm, float), ang.shape))
+    key, mech, digest = _carrier_key(case, stiffness, ang, T, direction, condition)
     carrier = _cached(_CARRIERS, key, lambda: _carrier_deg(model_for(mech, stiffness, digest), ang, T, direction))
     model = model_for(case, stiffness, digest)
     out = model.measured_output_rad(np.deg2rad(carrier))
@@ -154,6 +159,58 @@ def _carrier_deg(model, ang, T, direction) -> np.ndarray:
     from dynamics.model import quasi_static
     res = quasi_static(model, ang, int(direction) * T, int(direction), pin_forces=False)
     return res.input_angle_deg / model.ratio + res.te_arcsec / ARCSEC_PER_DEG   # the mechanics has no reading error
+
+
+def _solve_grid(mech, stiffness, ang, T, direction) -> np.ndarray:
+    """One grid's carrier angles [deg] (a worker's task: module-level, picklable)."""
+    return _carrier_deg(model_for(mech, stiffness), ang, T, direction)
+
+
+def _prefetch(case, stiffness, records, n: int, pool) -> None:
+    """Solve the steady records' grids missing from the carrier cache on `pool`'s processes."""
+    jobs = {}
+    for r in records:
+        if not _steady(case, r):
+            continue
+        d = r.direction
+        ang = periodic_grid_deg(case, n, d)
+        T = np.full(ang.shape, float(np.median(r.output_torque_Nm)))
+        key, mech, _ = _carrier_key(case, stiffness, ang, T, d, record_condition(r))
+        if key not in _CARRIERS and key not in jobs:
+            jobs[key] = (mech, ang, T, d)
+    if len(jobs) < 2:
+        return
+    futures = {k: pool.submit(_solve_grid, mech, stiffness, ang, T, d) for k, (mech, ang, T, d) in jobs.items()}
+    for k, f in futures.items():
+        _cached(_CARRIERS, k, f.result)
+
+
+def simulate_records(te_model: TEModel, case, stiffness, records, points_per_rev: int | None = None,
+                     pool=None) -> list[np.ndarray]:
+    """simulate_record for each record; with a process `pool` (concurrent.futures) and the
+    project's model (quasi_static_te, possibly wrapped: `__wrapped__`), the steady records'
+    grids are first solved in parallel (results identical: each grid is one deterministic solve)."""
+    n = default_points_per_rev(case) if points_per_rev is None else int(points_per_rev)
+    if pool is not None and getattr(te_model, "__wrapped__", te_model) is quasi_static_te:
+        _prefetch(case, stiffness, records, n, pool)
+    return [simulate_record(te_model, case, stiffness, r, n) for r in records]
+
+
+def process_pool(workers: int | None):
+    """A pool of `workers` local processes (fork: the compiled kernels are inherited), or None
+    for one worker. The caller shuts it down."""
+    import multiprocessing as mp
+    import os
+    from concurrent.futures import ProcessPoolExecutor
+    n = (os.cpu_count() or 1) if workers is None else int(workers)
+    if n <= 1 or "fork" not in mp.get_all_start_methods():
+        return None
+    return ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("fork"))
+
+
+def _steady(case, record: BenchRecord) -> bool:
+    T = record.output_torque_Nm
+    return float(np.subtract(*np.percentile(T, [95, 5]))) <= STEADY_TORQUE * case.rated_torque_Nm
 
 
 def simulation_indices(record: BenchRecord, points_per_rev: int) -> np.ndarray:
@@ -194,8 +251,7 @@ def simulate_record(te_model: TEModel, case, stiffness, record: BenchRecord,
     n = default_points_per_rev(case) if points_per_rev is None else int(points_per_rev)
     cond = record_condition(record)
     T = record.output_torque_Nm
-    spread = float(np.subtract(*np.percentile(T, [95, 5])))
-    if spread <= STEADY_TORQUE * case.rated_torque_Nm:
+    if _steady(case, record):
         period = 360.0 * case.ratio                      # input degrees per output revolution
         d = record.direction
         grid = periodic_grid_deg(case, n, d)
