@@ -11,8 +11,11 @@ Parameters, in this order:
   phase cos, sin [um]    a zero-mean pattern p_j = c cos(2 pi j / n) + s sin(2 pi j / n) of the
                          angle between crank j's eccentrics (Errors.eccentric_phase_arcmin), as the
                          tangential shift E * angle of disc 2's eccentric centre;
-  timing cos, sin [um]   the same pattern of the cranks' timing against their planet gears
-                         (Errors.crank_timing_arcmin), tangential at E.
+  (timing)               a crank turned against its planet gear (Errors.crank_timing_arcmin) moves
+                         its eccentrics tangentially as well: on the real records a separate timing
+                         pattern was collinear with the eccentric phase (95 % intervals wider than
+                         the range, the whole cause dropped), so the tangential pattern stands for
+                         both; the report says so.
 Bounds: +-50 um radial; tangential +-(60 arcmin x E) / sqrt(2) per component (the case's angle
 errors are validated to 60 arcmin: a pattern's crank value stays inside).
 Radial error details (e_1 .. e_n): per crank, the radius error of the eccentric under disc 1 only
@@ -79,8 +82,7 @@ class CrankEccentricityError(Cause):
         t = tangential_bound_um(case)
         return tuple(Param(f"eccentric_error_crank{j + 1}_um", "um", (-BOUND_UM, BOUND_UM))
                      for j in range(case.carrier.crank_count)) + tuple(
-            Param(f"{what}_pattern_{part}_um", "um", (-t, t)) for what in ("eccentric_phase", "timing")
-            for part in ("cos", "sin"))
+            Param(f"eccentric_phase_pattern_{part}_um", "um", (-t, t)) for part in ("cos", "sin"))
 
     def apply(self, case, stiffness, p):
         n = case.carrier.crank_count
@@ -88,8 +90,7 @@ class CrankEccentricityError(Cause):
         to_arcmin = ARCMIN_PER_RAD / (case.cycloid.eccentricity_mm * 1e3)
         return case.with_errors(
             eccentric_error_um=per_crank(case, "eccentric_error_um", p[:n]),
-            eccentric_phase_arcmin=per_crank(case, "eccentric_phase_arcmin", crank_pattern(n, *p[n:n + 2]) * to_arcmin),
-            crank_timing_arcmin=per_crank(case, "crank_timing_arcmin", crank_pattern(n, *p[n + 2:n + 4]) * to_arcmin)
+            eccentric_phase_arcmin=per_crank(case, "eccentric_phase_arcmin", crank_pattern(n, *p[n:n + 2]) * to_arcmin)
         ), stiffness
 
     def orders(self, case):
@@ -105,7 +106,7 @@ class CrankEccentricityError(Cause):
         out = {f"{c}_um": [float(v) for v in p],
                f"{c}_um_ci95": [ci(float(v), float(s), tq) for v, s in zip(p, fit.sd[:n])]}
         to_arcmin = ARCMIN_PER_RAD / (fit.case.cycloid.eccentricity_mm * 1e3)
-        for k, what in ((n, "eccentric_phase"), (n + 2, "timing")):
+        for k, what in ((n, "eccentric_phase"),):   # or timing: the records cannot separate them
             a, a_ci, ph, ph_ci = polar(fit.p[k:k + 2], fit.cov[k:k + 2, k:k + 2], tq)
             out.update({f"{c}_{what}_pattern_um": a, f"{c}_{what}_pattern_um_ci95": a_ci,
                         f"{c}_{what}_pattern_phase_deg": ph,
@@ -140,7 +141,7 @@ class CrankEccentricityError(Cause):
         p = np.zeros(n)
         p[j] = e
         a, ph, _ = eccentric_pattern(p)
-        return tuple(float(v) for v in p) + (0.0,) * 4, {
+        return tuple(float(v) for v in p) + (0.0,) * 2, {
             "crank_eccentricity_error_um": [float(v) for v in p], "crank_eccentricity_error_crank": j + 1,
             "crank_eccentricity_error_single_um": float(e), "crank_eccentricity_error_amplitude_um": a,
             "crank_eccentricity_error_phase_deg": ph}
