@@ -100,6 +100,9 @@ def _digest(obj, h) -> None:
         h.update(f"{type(obj).__name__}{len(obj)}".encode())
         for v in obj:
             _digest(v, h)
+    elif hasattr(obj, "__dict__") and not callable(obj):   # a plain object: its attributes
+        h.update(type(obj).__name__.encode())
+        _digest(vars(obj), h)
     else:
         h.update(repr(obj).encode())
 
