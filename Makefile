@@ -5,7 +5,8 @@
 #   make bench                        benchmarks -> $(BUILD)/bench.json
 #   make sensitivity CASE=...         the catalog rigidity against each size (~8 runs, not in `all`)
 # `all`, `test` and `bench` create .venv and install the pinned dependencies when missing.
-# Stage graph per case:  geometry -> mesh -> fem -> {matrix, hysteresis, fourbar, tolerance, signatures, diagnosis -> compensate} -> report
+# Stage graph per case:  geometry -> mesh -> fem -> {matrix, hysteresis, fourbar, tolerance, signatures, conditions,
+#                         diagnosis -> {compensate, conditions --diagnosis}} -> report
 
 PYTHON ?= python3
 VENV := .venv
@@ -33,7 +34,7 @@ export PYVISTA_OFF_SCREEN := true
 export OPENBLAS_NUM_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 
-.PHONY: all test bench clean install report sensitivity FORCE $(addprefix stage-,geometry mesh fem matrix hysteresis fourbar tolerance signatures diagnosis)
+.PHONY: all test bench clean install report sensitivity FORCE $(addprefix stage-,geometry mesh fem matrix hysteresis fourbar tolerance signatures diagnosis conditions)
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -131,6 +132,17 @@ $(BUILD)/%/diagnosis/diagnosis.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $$
 $(BUILD)/%/compensate/compensation.json: $(CASE_FP) $(BUILD)/%/diagnosis/diagnosis.json $$(RECORDS_$$*) $(SRC_compensate) | $(STAMP)
 	$(RUN) compensate --case $(CASE_FILE_$*) $(STIFF) --diagnosis $(BUILD)/$*/diagnosis/diagnosis.json --check $(RECORDS_$*) --out $(BUILD)/$*/compensate $(Q)
 
+# The operating map (issue 21): the real bench's 25 C conditions table through `conditions` (friction,
+# lubrication), and again with the diagnosis' fitted extension; read in place, never copied. Where the
+# table is absent the stage is skipped with a message.
+CONDITIONS_rv160n-81 = $(wildcard $(MEASURED)/conditions_25C.csv)
+$(foreach c,$(CASE_NAMES),$(if $(filter rv160n-81,$(c)),$(if $(CONDITIONS_$(c)),,$(info conditions: $(MEASURED)/conditions_25C.csv absent: the operating map of $(c) is skipped))))
+stage-conditions: $(foreach c,$(CASE_NAMES),$(if $(CONDITIONS_$(c)),$(BUILD)/$(c)/conditions/conditions.json))
+$(BUILD)/%/conditions/conditions.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $$(CONDITIONS_$$*) $(SRC_conditions) | $(STAMP)
+	$(RUN) conditions --case $(CASE_FILE_$*) $(STIFF) --table $(CONDITIONS_$*) --out $(BUILD)/$*/conditions $(SCHED) $(Q)
+$(BUILD)/%/conditions_diagnosed/conditions.json: $(CASE_FP) $(BUILD)/%/diagnosis/diagnosis.json $$(CONDITIONS_$$*) $(SRC_conditions) | $(STAMP)
+	$(RUN) conditions --case $(CASE_FILE_$*) $(STIFF) --table $(CONDITIONS_$*) --diagnosis $(BUILD)/$*/diagnosis/diagnosis.json --out $(BUILD)/$*/conditions_diagnosed $(SCHED) $(Q)
+
 # Paper 001's no-load bench case (RV-40E, i = 81) as a worked example of the coaxiality diagnosis.
 $(BUILD)/%/diagnosis/paper001.json: $(CASE_FP) $(BUILD)/%/fem/stiffness.json $(SRC_paper001) | $(STAMP)
 	$(RUN) paper001 --case $(CASE_FILE_$*) $(STIFF) --out $(BUILD)/$*/diagnosis $(Q)
@@ -151,11 +163,17 @@ STAGES = geometry/profile.csv mesh/crankshaft_mesh.npz fem/stiffness.json matrix
 report: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/report/index.html)
 $(BUILD)/%/report/index.html: $(CASE_FP) $$(addprefix $(BUILD)/%/,$(STAGES)) \
         $$(if $$(RECORDS_$$*),$(BUILD)/%/diagnosis/diagnosis.json) $$(if $$(RECORDS_$$*),$(BUILD)/%/compensate/compensation.json) \
+        $$(if $$(CONDITIONS_$$*),$(BUILD)/%/conditions/conditions.json) \
+        $$(if $$(and $$(CONDITIONS_$$*),$$(RECORDS_$$*)),$(BUILD)/%/conditions_diagnosed/conditions.json) \
         $$(if $$(filter rv40e-81,$$*),$(BUILD)/%/diagnosis/paper001.json) $(SRC_report) | $(STAMP)
 	$(RUN) report --case $(CASE_FILE_$*) --build $(BUILD) $(Q)
 
+# the suite on TEST_WORKERS processes (pytest-xdist; default one per core): each worker takes a run
+# of consecutive tests and an idle one steals half of another's rest, so a module's fixtures are made
+# about once; the kernels compile once for all workers (dynamics.kernel_cache)
+TEST_WORKERS ?= auto
 test: $(STAMP)
-	$(PY) -m pytest -q -p no:cacheprovider
+	$(PY) -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist worksteal
 
 bench: $(STAMP)
 	$(PY) bench/run_all.py --out $(BUILD)/bench.json

@@ -12,13 +12,15 @@ up for a nonlinear, statically indeterminate path).
 By component (fem.stiffness.COMPONENTS): a coupling lumps physical parts in series, which carry
 the same force increment dF, so its energy splits over them as dF^T C_part dF, i.e. in proportion
 of their tangent compliances at the operating state:
-  mesh     per crank, involute_mesh 1/k_m(s) vs crank_torsion rb2^2/k_t (k_m at the crank's mesh phase);
+the components of each coupling are fem.components.in_coupling(name):
+  mesh     per crank, the mesh components' line compliances (involute_mesh 1/k_m(s), crank_torsion
+           rb2^2/k_t) at the crank's mesh phase;
   support  dF = K_t du on the crank-axis DOFs (K_t the coupling's tangent there), part energies
-           dF^T C_part dF with C_part = fem.stiffness.support_compliance_parts (crank_bending,
-           support_bearings, carrier); a clearance's dead band only changes K_t;
-  needle   needle_bearings (the turning-arm FE law, all of it);
-  pin      per contact, its energy dq^T K_c dq split over pin_contact, disc_body, pin_groove by
-           fem.stiffness.pin_series_tangents at that contact's force (tooth-pair law at its phase).
+           dF^T C_part dF with C_part = fem.stiffness.support_compliance_parts (one matrix per
+           support component); a clearance's dead band only changes K_t;
+  pin      per contact, its energy dq^T K_c dq split over the pin components by
+           fem.stiffness.pin_series_tangents at that contact's force (tooth-pair law at its phase);
+  others   a coupling that is one component (needle: needle_bearings) takes all its energy.
 Each coupling's split is normalised, so the component shares also sum to 1 exactly.
 """
 from __future__ import annotations
@@ -29,9 +31,9 @@ import numpy as np
 
 from dynamics import couplings
 from dynamics.couplings import mesh as mesh_coupling
-from dynamics.reducer import ReducerModel
+from dynamics.reducer import ReducerModel, build_model
 from dynamics.statics import solve_static
-from fem.stiffness import COMPONENTS, pin_series_tangents, support_compliance_parts
+from fem.stiffness import COMPONENTS, in_coupling, pin_series_tangents, support_compliance_parts
 
 
 def coupling_tangents(model: ReducerModel, q: np.ndarray, input_rad: float) -> dict[str, np.ndarray]:
@@ -72,20 +74,22 @@ def normalised(weights: dict[str, float]) -> dict[str, float]:
 # (component -> energy); compliance_budget normalises it to the coupling's share.
 
 def mesh_split(model: ReducerModel, q: np.ndarray, input_rad: float, dq: np.ndarray) -> dict[str, float]:
-    """Per crank j: energy k_s,j (g_j . dq)^2 (g the line-of-action gradient, input locked), split in
-    the series ratio 1/k_m(s_j) : rb2^2/k_t (dynamics.couplings.mesh)."""
+    """Per crank j: energy (g_j . dq)^2 / sum_c c_c (g the line-of-action gradient, input locked),
+    split in the series ratio of the mesh components' line compliances at the crank's mesh phase
+    (fem.components, COUPLING "mesh": involute_mesh 1/k_m(s), crank_torsion rb2^2/k_t)."""
     p = couplings.params_of(model.arrays, "mesh")
     rb1, rb2, eps = p.rb_sun_m, p.rb_planet_m, p.contact_ratio
-    c_tor = rb2 * rb2 / p.k_torsion_Nm_per_rad
-    w = {"involute_mesh": 0.0, "crank_torsion": 0.0}
+    comps = in_coupling("mesh")
+    w = dict.fromkeys((c.NAME for c in comps), 0.0)
     for j in range(p.dof.shape[0]):
         i0, ij = p.dof[j]
         s = p.z_sun * (input_rad - q[i0]) / (2 * math.pi) + p.phase[j]
         h, _ = mesh_coupling._double_contact(s, eps)
-        c_m = 1.0 / (p.k_mean_N_per_m * (1.0 + p.variation * (h - (eps - 1.0))))
-        energy = (rb2 * dq[ij] - (rb1 + rb2) * dq[i0]) ** 2 / (c_m + c_tor)
-        w["involute_mesh"] += energy * c_m / (c_m + c_tor)
-        w["crank_torsion"] += energy * c_tor / (c_m + c_tor)
+        c = {comp.NAME: comp.line_compliance_m_per_N(p, h) for comp in comps}
+        total = sum(c.values())
+        energy = (rb2 * dq[ij] - (rb1 + rb2) * dq[i0]) ** 2 / total
+        for k, v in c.items():
+            w[k] += energy * v / total
     return w
 
 
@@ -120,7 +124,7 @@ def pin_split(model: ReducerModel, q, input_rad, dq, K_pin=None) -> dict[str, fl
     pc = model.stiffness.pin_contact
     pos = np.clip(pin_phase_deg(model, q).reshape(-1), pc.position_deg[0], pc.position_deg[-1])
     k, n = np.interp(pos, pc.position_deg, pc.law_k_N_per_m_pow), np.interp(pos, pc.position_deg, pc.law_n)
-    w = {"pin_contact": 0.0, "disc_body": 0.0, "pin_groove": 0.0}
+    w = dict.fromkeys((c.NAME for c in in_coupling("pin")), 0.0)
     for c in np.flatnonzero(force > 0):
         active = np.zeros(model.slots.n_contacts, np.bool_)
         active[off + c] = True
@@ -132,12 +136,24 @@ def pin_split(model: ReducerModel, q, input_rad, dq, K_pin=None) -> dict[str, fl
     return w
 
 
-SPLITS = {  # coupling -> f(model, q, input_rad, dq, K_coupling) -> {component: energy}
+def whole(name: str):
+    """A coupling that is one component (needle, housing): all its energy is that component's."""
+    comps = in_coupling(name)
+    if len(comps) != 1:
+        raise KeyError(f"coupling {name!r} carries components {[c.NAME for c in comps]}: it needs a split in SPLITS")
+    return lambda m, q, th, dq, K: {comps[0].NAME: float(dq @ K @ dq)}
+
+
+SPLITS = {  # coupling -> f(model, q, input_rad, dq, K_coupling) -> {component: energy}; others: whole()
     "mesh": lambda m, q, th, dq, K: mesh_split(m, q, th, dq),
     "support": _support_split,
-    "needle": lambda m, q, th, dq, K: {"needle_bearings": float(dq @ K @ dq)},
     "pin": pin_split,
 }
+
+
+def split_for(name: str):
+    """The split of coupling `name` (SPLITS, or the whole coupling for a one-component coupling)."""
+    return SPLITS.get(name) or whole(name)
 
 
 def tangent_state(model: ReducerModel, torque_Nm: float, input_angle_deg: float = 0.0):
@@ -157,12 +173,10 @@ def compliance_budget(model: ReducerModel, torque_Nm: float | None = None,
     T = model.case.rated_torque_Nm if torque_Nm is None else float(torque_Nm)
     q, th, Ks, dq = tangent_state(model, T, input_angle_deg)
     by_coupling = energy_shares(Ks, dq)
-    missing = set(by_coupling) - set(SPLITS)
-    if missing:
-        raise KeyError(f"couplings {sorted(missing)} have no component split in dynamics.budget.SPLITS")
     parts = dict.fromkeys(COMPONENTS, 0.0)
     for name, share in by_coupling.items():
-        for comp, frac in normalised(SPLITS[name](model, q, th, dq, Ks[name])).items():
+        split = split_for(name)
+        for comp, frac in normalised(split(model, q, th, dq, Ks[name])).items():
             parts[comp] += share * frac
     return {"torque_Nm": T, "input_angle_deg": float(input_angle_deg),
             "tangent_rigidity_Nm_per_arcmin": float(np.deg2rad(1 / 60) / dq[model.i_out]),
@@ -186,3 +200,18 @@ def against_reference(rigidity_Nm_per_arcmin: float, reference_Nm_per_arcmin: fl
             "note": "factor on one component's compliance that alone brings the rigidity to the "
                     "reference (first order in the shares at rated torque); components that cannot "
                     "do it alone (factor <= 0 or share ~ 0) are omitted or null"}
+
+
+def rigidity_band(model: ReducerModel, rigidity) -> dict:
+    """The catalog rigidity at the ends of each banded component's published constants (a component
+    whose entry carries `band_factors`: its compliance x factor at the low and high end, e.g. the
+    contact-layer law's c range of fem.components.joints). rigidity: ReducerModel -> N m/arcmin (the
+    catalog test). Returns {component: {"factors": [lo, hi], "rigidity_Nm_per_arcmin": [at lo, at hi]}}."""
+    out = {}
+    for name, entry in model.stiffness.parts.items():
+        factors = getattr(entry, "band_factors", None)
+        if not factors:
+            continue
+        rig = [float(rigidity(build_model(model.case, model.stiffness.stiffened(name, 1.0 / f)))) for f in factors]
+        out[name] = {"factors": [float(f) for f in factors], "rigidity_Nm_per_arcmin": rig}
+    return out

@@ -310,7 +310,7 @@ def with_source(build: Build, source: str, deviation_mm) -> Build:
 
 def statics_pair_loads(case: ReducerCase, geom: PairGeometry, beta1_rad: float,
                        torque_Nm: float) -> PairLoads:
-    """Turning-arm forces from a rigid-disc statics estimate (FALLBACK when no load-sharing solution).
+    """Turning-arm forces from a rigid-disc statics estimate (closed form, no lumped model: tests, benches).
 
     Pins: every pin normal passes through the pitch point (zp E from the housing centre on the line
     of centres); pins whose force turns the disc the loaded way carry load in proportion to their
@@ -340,6 +340,36 @@ def statics_pair_loads(case: ReducerCase, geom: PairGeometry, beta1_rad: float,
     total = f1 + (f2 if c.disc_count == 2 else 0.0)
     return PairLoads(geom.to_pair_frame(f1), geom.to_pair_frame(total), float(torque_Nm),
                      float(beta1_rad), "statics estimate (rigid disc, equal pin stiffness)")
+
+
+# ---------------------------------------------------------------- forces: the lumped model
+
+def model_pair_loads(case: ReducerCase, geom: PairGeometry, stiffness, beta1_rad: float,
+                     torque_Nm: float) -> PairLoads:
+    """Turning-arm forces from the lumped model's static load sharing (dynamics.statics.solve_static)
+    at the input angle that puts crank pair (0, 1) at beta1."""
+    from dynamics.model import build_model
+    from dynamics.statics import solve_static
+    model = build_model(case, stiffness)
+    s0 = solve_static(model, 0.0, torque_Nm)
+    carrier0 = math.radians(s0.output_angle_deg)
+    psi0 = float(s0.crank_angle_rad[0]) - carrier0            # eccentric angle on the carrier
+    # the eccentric turns against the carrier (zc/zp - ...): measure its rate numerically
+    s1 = solve_static(model, 1.0, torque_Nm)
+    rate = (float(s1.crank_angle_rad[0]) - math.radians(s1.output_angle_deg) - psi0)  # rad per input deg
+    rate = math.atan2(math.sin(rate), math.cos(rate))
+    target = beta1_rad + geom.ground_angle_rad
+    dpsi = math.atan2(math.sin(target - psi0), math.cos(target - psi0))
+    st = solve_static(model, dpsi / rate, torque_Nm)
+    carrier = math.radians(st.output_angle_deg)
+    c, s = math.cos(-carrier), math.sin(-carrier)
+    rot = np.array([[c, -s], [s, c]])
+    f = np.asarray(st.bearing_force_N, float) @ rot.T            # (discs, cranks, 2), carrier frame
+    psi = float(st.crank_angle_rad[0]) - carrier
+    beta1 = math.atan2(math.sin(psi - geom.ground_angle_rad), math.cos(psi - geom.ground_angle_rad))
+    return PairLoads(geom.to_pair_frame(f[0, :2]), geom.to_pair_frame(f[:, :2].sum(0)),
+                     float(torque_Nm), beta1,
+                     f"dynamics.model.solve_static (input {dpsi / rate:.3f} deg)")
 
 
 # ---------------------------------------------------------------- sweeps

@@ -10,7 +10,7 @@ the returned state (`RunState` plus the Work's candidate-contact mask), so Pytho
 between chunks (signals, progress) and a chunked run is bit-identical to an unchunked one.
 
 Bounded angles: the mechanism repeats exactly when the input turns one period 2 pi i (the carrier
-one revolution; q changes by `shift`, `dynamics.statics._turn_shift`). The integration keeps the
+one revolution; q changes by `shift`, `dynamics.statics.turn_shift`). The integration keeps the
 input within half a period of zero by removing whole periods from the state as it goes (counted in
 RunState.counts[2], added back to the recorded output angle), so every angle the couplings see
 stays bounded however long the run: an accumulated angle loses the precision of its trigonometry

@@ -14,6 +14,8 @@ Standard layout (n = 1 + nc + 2 nc nd + 3 nd):
                                     (bearings, crank bending, carrier racking) is a stiffness matrix
                                     of the carrier, so it is written where that matrix is constant
   disc            nd x (x, y, rot)  disc centre [m] and rotation [rad]
+  housing         nh x (a)          the housing's modal coordinates [m] (dynamics.couplings.housing;
+                                    none without a housing entry in the stiffness)
 """
 from __future__ import annotations
 
@@ -78,12 +80,13 @@ class DofLayout:
         return cls(tuple(blocks))
 
     @classmethod
-    def standard(cls, n_crank: int, n_disc: int) -> DofLayout:
+    def standard(cls, n_crank: int, n_disc: int, n_housing: int = 0) -> DofLayout:
         return cls.build([("carrier", 1, ("rot",), (True,), ""),
                           ("crank_rotation", n_crank, ("rot",), (True,), "crank"),
                           ("crank_axis", n_crank * n_disc, ("x", "y"), (False, False), "crank",
                            [f"crank{j + 1}_plane{d + 1}" for j in range(n_crank) for d in range(n_disc)]),
-                          ("disc", n_disc, ("x", "y", "rot"), (False, False, True), "disc")])
+                          ("disc", n_disc, ("x", "y", "rot"), (False, False, True), "disc"),
+                          ("housing", n_housing, ("a",), (False,), "housing_mode")])
 
     def __getitem__(self, name: str) -> Block:
         for b in self.blocks:
@@ -100,12 +103,16 @@ class DofLayout:
         return sum((b.labels() for b in self.blocks), ())
 
     def vector(self, per_block: dict) -> np.ndarray:
-        """n-vector from one value per component of each block's item (repeated over its items)."""
-        missing = {b.name for b in self.blocks} - set(per_block)
+        """n-vector from one value per component of each block's item (repeated over its items), or
+        one value per DOF of the block (items that differ, e.g. the housing's modal masses)."""
+        missing = {b.name for b in self.blocks if b.size} - set(per_block)
         if missing:
             raise KeyError(f"vector: no values for blocks {sorted(missing)}")
-        return np.concatenate([np.tile(np.asarray(per_block[b.name], dtype=float), b.count)
-                               for b in self.blocks])
+        out = []
+        for b in self.blocks:
+            v = np.asarray(per_block.get(b.name, ()), dtype=float).reshape(-1)
+            out.append(v if len(v) == b.size and b.count > 1 else np.tile(v, b.count) if b.size else np.zeros(0))
+        return np.concatenate(out)
 
     def scale(self, rotation_m: float) -> np.ndarray:
         """Solver scaling: rotation_m (a lever arm) for angles, 1 for lengths, so that scale * q

@@ -1,44 +1,27 @@
-"""Paper 001's load-gradient x load-form matrix: 12 runs, sigma table, spectra (pure of plotting).
+"""Paper 001's load-gradient x load-form matrix: one cell's run and summary, sigma tables, paper 001's
+TE definition (pure of files and plotting; the cell cache and its npz artifacts: pipeline.matrix_cache).
 
-Each task is a pure function of (case path, stiffness path, form, torque, duration) so it can run
-in a local process or on Dask with identical results (pipeline.sweep.run_tasks).
 sigma is paper 001's population standard deviation of TE in two windows: (a) the steady part
 t >= STEADY_FROM_S (after the 1 s speed ramp and the 1..2 s constant-load ramp; ours, physical,
 the te_std.csv contract) and (b) the last full output revolution of the run (2.95..7 s at
 88.89 deg/s: paper 001 analyses TE "for one rotation of the output flange", most likely this);
-the whole-run sigma is kept too (it includes the ramps).
-
-Resumable: each cell is its own artifact, DIR/<form>_<T>.npz, holding its arrays, its summary and
-the fingerprint of everything it was computed from (case and stiffness file content, form, torque,
-duration, time step, and the source of the code that computes it). `run_matrix` reuses a cell whose
-fingerprint matches and computes only the others, so an interrupted matrix resumes where it stopped
-and a rerun with unchanged inputs computes nothing. Cells are written with fixed zip timestamps:
-same inputs, same bytes. Wall times go to the log, never into an artifact.
+the whole-run sigma is kept too (it includes the ramps). The forms are dynamics.loads' table:
+paper 001's three by default, any other by name, its paper figure read from its own entry.
 """
 from __future__ import annotations
 
-import functools
-import hashlib
-import json
-import zipfile
-from pathlib import Path
-from typing import Callable, Sequence
-
 import numpy as np
 
-from dynamics.loads import FORMS, LoadSpec
+from dynamics.loads import PAPER_001_FORMS, LoadSpec, load_form
 
 TORQUES_NM = (100.0, 200.0, 300.0, 400.0)
-CELL_SCHEMA = "rv-matrix-cell/1"
-_ROOT = Path(__file__).resolve().parent.parent
-# the sources a cell's numbers come from (a change to any of them recomputes every cell)
-CODE_SOURCES = ("dynamics/**/*.py", "geometry/**/*.py", "fem/stiffness.py")
 STEADY_FROM_S = 2.0
-# paper 001, standard-deviation table [arcsec]: rows 100..400 N m, columns constant, square, sine
-PAPER_001_SIGMA_ARCSEC = np.array([[14.154, 14.056, 14.172],
-                                   [14.695, 14.898, 15.416],
-                                   [16.817, 17.312, 17.930],
-                                   [19.196, 19.032, 19.485]])
+
+
+def paper001_sigma_arcsec(form: str, torque_Nm: float) -> float | None:
+    """Paper 001's sigma [arcsec] of this form at this load gradient, None where it has no figure."""
+    column = load_form(form).paper001_sigma_arcsec
+    return None if column is None else column.get(float(torque_Nm))
 
 
 def characteristic_orders(case) -> dict[str, float]:
@@ -50,45 +33,13 @@ def characteristic_orders(case) -> dict[str, float]:
             "cycloid-pin mesh zp*zc": float(c.zp * c.zc)}
 
 
-def cell_name(form: str, torque_Nm: float) -> str:
-    return f"{form}_{int(round(torque_Nm))}"
-
-
-@functools.lru_cache(maxsize=1)
-def code_fingerprint() -> str:
-    """sha256 of CODE_SOURCES and the numpy / numba versions."""
-    import numba
-    h = hashlib.sha256(f"numpy {np.__version__} numba {numba.__version__}".encode())
-    for pattern in CODE_SOURCES:
-        for path in sorted(_ROOT.glob(pattern)):
-            h.update(str(path.relative_to(_ROOT)).encode() + b"\0" + path.read_bytes())
-    return h.hexdigest()
-
-
-def cell_fingerprint(case_path: str, stiffness_path: str, form: str, torque_Nm: float, duration_s: float,
-                     dt_s: float | None) -> str:
-    """sha256 of one cell's inputs: file contents (not paths), load, duration, step and the code."""
-    def sha(path):
-        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-    blob = json.dumps({"schema": CELL_SCHEMA, "case_sha256": sha(case_path), "stiffness_sha256": sha(stiffness_path),
-                       "form": form, "torque_Nm": float(torque_Nm), "duration_s": float(duration_s),
-                       "dt_s": None if dt_s is None else float(dt_s), "code": code_fingerprint()}, sort_keys=True)
-    return hashlib.sha256(blob.encode()).hexdigest()
-
-
-def run_case(case_path: str, stiffness_path: str, form: str, torque_Nm: float, duration_s: float,
-             out_dir: str, dt_s: float | None = None) -> dict:
-    """Simulate one cell, write DIR/<form>_<T>.npz (arrays, summary, fingerprint); return the summary."""
-    from dynamics.model import build_model, simulate
+def run_cell(model, form: str, torque_Nm: float, duration_s: float, dt_s: float | None = None,
+             name: str = "") -> tuple[dict, dict, tuple | None]:
+    """Simulate one cell: (summary, arrays of the run, spectrum (order, amplitude) or None)."""
+    from dynamics.model import simulate
     from dynamics.results import ResultError
-    from fem.stiffness import load as load_stiffness
-    from geometry.params import load_case
-    fingerprint = cell_fingerprint(case_path, stiffness_path, form, torque_Nm, duration_s, dt_s)
-    case = load_case(case_path)
-    model = build_model(case, load_stiffness(stiffness_path))
     res = simulate(model, LoadSpec(form, torque_Nm), duration_s=duration_s, dt_s=dt_s,
                    store_pin_forces=False)
-    name = cell_name(form, torque_Nm)
     steady = res.t_s >= STEADY_FROM_S
     out = {"form": form, "torque_Nm": torque_Nm, "name": name,
            "sigma_arcsec": res.std_arcsec(STEADY_FROM_S) if steady.any() else float("nan"),
@@ -100,58 +51,14 @@ def run_case(case_path: str, stiffness_path: str, form: str, torque_Nm: float, d
     try:
         sp = res.spectrum(STEADY_FROM_S)
         spectrum = (sp.order, sp.amplitude)
-        out["lines"] = {k: sp.at(o) for k, o in characteristic_orders(case).items()}
+        out["lines"] = {k: sp.at(o) for k, o in characteristic_orders(model.case).items()}
     except ResultError:   # shorter than one output revolution (short test runs): no spectrum
         spectrum = None
         out["lines"] = {}
     arrays = dict(t_s=res.t_s, input_angle_deg=res.input_angle_deg, output_angle_deg=res.output_angle_deg,
                   output_torque_Nm=res.output_torque_Nm, te_arcsec=res.te_arcsec,
-                  teeth_in_contact=res.teeth_in_contact, cell_fingerprint=np.array(fingerprint),
-                  cell_summary=np.array(json.dumps(out)))
-    if spectrum is not None:
-        arrays.update(spectrum_order=spectrum[0], spectrum_amplitude=spectrum[1])
-    _save_npz(Path(out_dir) / f"{name}.npz", arrays)
-    return {**out, "spectrum": spectrum}
-
-
-def _save_npz(path: Path, arrays: dict) -> None:
-    """np.savez_compressed with fixed zip timestamps (same arrays, same bytes), written atomically."""
-    from geometry.artifacts import atomic_path
-    with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zf:
-        for key, value in arrays.items():
-            info = zipfile.ZipInfo(f"{key}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-            info.compress_type = zipfile.ZIP_DEFLATED
-            with zf.open(info, "w", force_zip64=True) as fh:
-                np.lib.format.write_array(fh, np.asanyarray(value), allow_pickle=False)
-
-
-def finished_cell(out_dir: str | Path, form: str, torque_Nm: float, fingerprint: str) -> dict | None:
-    """The summary of a cell already computed from exactly these inputs, else None."""
-    path = Path(out_dir) / f"{cell_name(form, torque_Nm)}.npz"
-    if not path.is_file():
-        return None
-    try:
-        with np.load(path, allow_pickle=False) as d:
-            if str(d["cell_fingerprint"]) != fingerprint:
-                return None
-            out = json.loads(str(d["cell_summary"]))
-            out["spectrum"] = ((d["spectrum_order"], d["spectrum_amplitude"])
-                               if "spectrum_order" in d.files else None)
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile):   # foreign, old or damaged: recompute
-        return None
-    return out
-
-
-def run_matrix(case_path: str, stiffness_path: str, duration_s: float, out_dir: str, dt_s: float | None,
-               runner: Callable[[Callable, Sequence[tuple]], list]) -> tuple[list[dict], int]:
-    """Every cell (TORQUES_NM x FORMS, in that order): reused where finished, else computed through
-    runner(run_case, tasks). Returns (summaries, number reused)."""
-    cells = [(case_path, stiffness_path, form, T, duration_s, out_dir, dt_s) for T in TORQUES_NM for form in FORMS]
-    results = [finished_cell(out_dir, c[2], c[3], cell_fingerprint(*c[:5], dt_s)) for c in cells]
-    todo = [i for i, r in enumerate(results) if r is None]
-    for i, r in zip(todo, runner(run_case, [cells[i] for i in todo]) if todo else []):
-        results[i] = r
-    return results, len(cells) - len(todo)
+                  teeth_in_contact=res.teeth_in_contact)
+    return out, arrays, spectrum
 
 
 def _or_nan(fn) -> float:
@@ -162,11 +69,11 @@ def _or_nan(fn) -> float:
         return float("nan")
 
 
-def sigma_table(results: list[dict], key: str = "sigma_arcsec") -> np.ndarray:
-    """(4, 3) table, rows TORQUES_NM, columns FORMS."""
-    tab = np.full((len(TORQUES_NM), len(FORMS)), np.nan)
+def sigma_table(results: list[dict], key: str = "sigma_arcsec", forms: tuple[str, ...] = PAPER_001_FORMS) -> np.ndarray:
+    """(torques, forms) table, rows TORQUES_NM, columns `forms` (by name)."""
+    tab = np.full((len(TORQUES_NM), len(forms)), np.nan)
     for r in results:
-        tab[TORQUES_NM.index(r["torque_Nm"]), FORMS.index(r["form"])] = r[key]
+        tab[TORQUES_NM.index(r["torque_Nm"]), forms.index(r["form"])] = r[key]
     return tab
 
 
@@ -197,11 +104,10 @@ def last_rev_window(t_k, t_s, output_angle_deg) -> np.ndarray:
     return np.asarray(t_k) >= t_s[np.flatnonzero(travel >= 360.0)[-1]]
 
 
-def paper001_sigmas(npz_path, ratio: float) -> dict:
-    """sigma [arcsec] of one matrix cell, last output revolution: ours (theta_out - theta_in / i on the
-    record), paper 001's per-step dphi at 100 Hz, and its running sum at 100 Hz."""
-    with np.load(npz_path, allow_pickle=False) as d:
-        t, th_in, th_out, te = d["t_s"], d["input_angle_deg"], d["output_angle_deg"], d["te_arcsec"]
+def paper001_sigmas(t, th_in, th_out, te, ratio: float) -> dict:
+    """sigma [arcsec] of one matrix cell's run (time, input and output angle, TE), last output revolution:
+    ours (theta_out - theta_in / i on the record), paper 001's per-step dphi at 100 Hz, and its
+    running sum at 100 Hz."""
     tk, step, summed = paper001_te(t, th_in, th_out, ratio)
     last = last_rev_window(tk, t, th_out)
     ours = last_rev_window(t, t, th_out)

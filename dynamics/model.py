@@ -54,7 +54,8 @@ Load range: the FE tables end at the catalog momentary torque (fem.reduce), so `
 a load form whose peak exceeds case.operation.momentary_torque_Nm, and a run whose largest pin
 force left the FE pin-contact table (a dynamic overshoot) ends with that reason, not a result
 from an extrapolated law.
-Statics: `solve_static` (robust strategy and the zero-load convention in `dynamics.statics`).
+Statics (`solve_static`, `quasi_static`, linearisation; the robust strategy and the zero-load
+convention): `dynamics.statics`, imported from there.
 """
 from __future__ import annotations
 
@@ -66,15 +67,11 @@ import numpy as np
 
 from dynamics import kernels as kn
 from dynamics.loads import LoadSpec, input_angle_deg, input_speed_deg_s, load_torque_Nm
-from dynamics.reducer import ROT_SCALE_M, DynamicsError, ReducerModel, build_model, evaluate
+from dynamics.reducer import DynamicsError, ReducerModel, build_model, evaluate
 from dynamics.results import TEResult
-from dynamics.statics import (STATIC_TOL_N, ZERO_LOAD_FRACTION, _static, _turn_shift, check_direction,
-                              damping_beta_s, eigenfrequencies_Hz, kinematic_q, linearise, nominal_q,
-                              quasi_static, solve_static, te_result)
+from dynamics.statics import check_direction, damping_beta_s, static_q, te_result, turn_shift
 
-__all__ = ["DynamicsError", "ReducerModel", "build_model", "evaluate", "simulate", "check_load_range",
-           "solve_static", "quasi_static", "linearise", "eigenfrequencies_Hz", "damping_beta_s", "kinematic_q",
-           "nominal_q", "ROT_SCALE_M", "STATIC_TOL_N", "ZERO_LOAD_FRACTION"]
+__all__ = ["DynamicsError", "ReducerModel", "build_model", "evaluate", "simulate", "check_load_range"]
 
 DEFAULT_SPEED_RPM = 1200.0   # DESIGN.md: paper 001's 7200 deg/s is the simulate default
 DEFAULT_DT_S = 1e-4
@@ -137,7 +134,7 @@ def run_dynamics(model: ReducerModel, q0, v0, th, w, T, dt: float, stride: int, 
     nc = len(m.contact_group)
     st = kn.RunState(q=np.array(q0, float), v=np.array(v0, float), acc=np.zeros(n), fn=np.zeros(n),
                      sums=np.zeros(4), counts=np.zeros(3, np.int64), peak=np.zeros(nc))
-    shift, period = _turn_shift(model), 2.0 * math.pi * model.ratio
+    shift, period = turn_shift(model), 2.0 * math.pi * model.ratio
     out = kn.Samples(q_out=np.zeros(ns), teeth=np.zeros((ns, m.n_groups), np.int64),
                      force=np.zeros((ns if store_forces else 1, nc)), tau_in=np.zeros(ns), energy=np.zeros((ns, 4)))
     wk = model.work()
@@ -197,7 +194,7 @@ def simulate(model: ReducerModel, load: LoadSpec, *, duration_s: float = 7.0,
     w = direction * np.deg2rad(input_speed_deg_s(t, speed, ramp))
     T = direction * np.asarray(load_torque_Nm(load, t), dtype=float)
     beta = damping_beta_s(model) if damping_beta_s_ is None else float(damping_beta_s_)
-    q, _ = _static(model, th[0], T[0], None, direction)
+    q, _ = static_q(model, th[0], T[0], None, direction)
     run = run_dynamics(model, q, np.zeros_like(q), th, w, T, dt, stride, hht_alpha, beta,
                        store_forces=store_pin_forces)
     pin_peak = float(model.contacts(run.peak_force_N).max(initial=0.0))

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from dynamics.results import ARCSEC_PER_DEG
-from geometry.artifacts import InputError, atomic_path
+from geometry.artifacts import InputError, atomic_path, read_text
 
 COLUMNS = ("time_s", "input_angle_deg", "output_angle_deg", "output_torque_Nm")
 
@@ -327,25 +327,8 @@ _ALLOWED = f"a record is a UTF-8 text CSV with the header {','.join(COLUMNS)}"
 
 def _text_lines(path: Path) -> list[str]:
     """The lines of a record file; anything that is not a readable UTF-8 text file is refused."""
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise RecordError(f"{path}: record not found") from None
-    except IsADirectoryError:
-        raise RecordError(f"{path}: is a folder, not a record file; {_ALLOWED}") from None
-    except PermissionError:
-        raise RecordError(f"{path}: cannot be read (permission denied); {_ALLOWED}") from None
-    except OSError as exc:
-        raise RecordError(f"{path}: cannot be read ({exc.strerror or exc}); {_ALLOWED}") from None
-    nul = raw.find(b"\0")   # valid UTF-8 can hold NUL bytes, a CSV cannot: a binary file
-    if nul >= 0:
-        raise RecordError(f"{path}: binary content (NUL byte at offset {nul}); {_ALLOWED}")
-    try:
-        text = raw.decode("utf-8-sig")   # a spreadsheet's byte-order mark is not part of the header
-    except UnicodeDecodeError as exc:
-        raise RecordError(f"{path}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset {exc.start}); "
-                          f"{_ALLOWED} (re-save it as UTF-8)") from None
-    return text.splitlines()
+    return read_text(path, what="record", error=RecordError, allowed=_ALLOWED, refuse_nul=True,
+                     wording={"missing": "record not found"}).splitlines()
 
 
 def _is_number(s: str) -> bool:

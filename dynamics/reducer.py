@@ -95,13 +95,15 @@ def build_model(case: ReducerCase, stiffness: StiffnessModel) -> ReducerModel:
         raise DynamicsError(f"stiffness for case {stiffness.case_name!r} given to case {case.name!r}: "
                             f"run `python -m pipeline fem --case` on this case")
     stiffness.check()
-    layout = DofLayout.standard(case.carrier.crank_count, case.cycloid.disc_count)
+    hm = stiffness.parts.get("housing")
+    layout = DofLayout.standard(case.carrier.crank_count, case.cycloid.disc_count,
+                                0 if hm is None else len(hm.stiffness_N_per_m))
     arrays, slots = couplings.build(case, stiffness, layout)
     er = case.errors
     return ReducerModel(case=case, stiffness=stiffness, layout=layout, arrays=arrays, slots=slots,
-                        mass=layout.vector(bodies.inertias(case)), scale=layout.scale(ROT_SCALE_M),
+                        mass=layout.vector(bodies.inertias(case, stiffness)), scale=layout.scale(ROT_SCALE_M),
                         ratio=case.ratio,
-                        coaxiality_rad=er.output_coaxiality_um * 1e-6 / (case.carrier.output_flange_radius_mm * 1e-3),
+                        coaxiality_rad=er.output_coaxiality_um * 1e-6 / case.si.output_flange_radius_m,
                         coaxiality_phase_rad=np.deg2rad(er.output_coaxiality_phase_deg),
                         reading_lobes=np.array([(m, a * 1e-3 / case.carrier.output_flange_radius_mm, np.deg2rad(ph))
                                                 for m, a, ph in er.output_reading_lobes], float).reshape(-1, 3))

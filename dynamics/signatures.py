@@ -307,3 +307,28 @@ def atlas(case, stiffness, source_list=None, n: int | None = None, torques=None,
             "stage1_mesh_order_zp_z2": zp * z2, "stage1_mesh_order_folds_to": folded(zp * z2, n),
             "torques_Nm": list(torques), "directions": list(directions), "solver": "quasi_static"}
     return out, grid
+
+
+STRUCTURE_RIGID = 1e6          # the housing stiffened this much: the rigid-housing reference
+
+
+def housing_structure(case, stiffness, torques=None, directions=DIRECTIONS) -> Signature | None:
+    """The elastic housing's own lines (no error: its bolt pattern makes the pin support stiffness
+    vary around the ring): the ideal build's TE against the same build with the housing held rigid,
+    per torque and direction, on a grid fine enough for the bolt lobes (n_b-fold pattern: lines at
+    multiples of gcd(zp, n_b) zc, resolved up to 2 n_b zc). None when the stiffness has no housing."""
+    if "housing" not in stiffness.parts:
+        return None
+    from math import gcd
+    torques = torques_Nm(case) if torques is None else tuple(torques)
+    lobe = gcd(case.cycloid.zp, case.housing.bolt_count)
+    n = points_per_rev(case, max_order=max(4 * case.cycloid.zp, 2 * lobe * case.cycloid.zc))
+    ang = input_angles_deg(case, n)
+    te = baseline(case, stiffness, ang, torques, directions)
+    rigid = baseline(case, stiffness.stiffened("housing", STRUCTURE_RIGID), ang, torques, directions)
+    spec = np.array([[te_spectrum(te[i, j] - rigid[i, j]) for j in range(len(torques))]
+                     for i in range(len(directions))])
+    src = Source("housing_structure", f"the elastic housing as built: {case.housing.bolt_count} bolts, pin support "
+                 f"stiffness lobes at multiples of {lobe} (no error: the structure itself)", "as built", 1.0,
+                 "structure", lambda c, s: {})
+    return Signature(src, tuple(float(t) for t in torques), tuple(directions), spec)

@@ -38,7 +38,7 @@ def nominal_q(model: ReducerModel, input_rad: float, lag_rad: float = 0.0) -> np
     q[io] = input_rad / model.ratio - lag_rad
     phi = _crank_phase(model, input_rad, q[io])
     q[lay["crank_rotation"].slice] = phi
-    E = model.case.cycloid.eccentricity_mm * 1e-3
+    E = model.case.si.eccentricity_m
     disc = lay["disc"]
     for d in range(model.n_disc):
         i = disc.index(d)
@@ -46,7 +46,7 @@ def nominal_q(model: ReducerModel, input_rad: float, lag_rad: float = 0.0) -> np
     return q
 
 
-def _turn_shift(model: ReducerModel) -> np.ndarray:
+def turn_shift(model: ReducerModel) -> np.ndarray:
     """Exact change of q when the input turns one period 2 pi i (the carrier one revolution):
     carrier and discs +2 pi, eccentrics 2 pi (1 - zp), mesh deflection and translations unchanged.
     The whole mechanism (pins, mesh phase z1 (th - q0) / 2 pi, cranks) repeats after it."""
@@ -164,12 +164,13 @@ def _continuation(model, th, T, qk, w):
     return q, total, 0 if frac >= 1.0 else max(status, 1)
 
 
-def _static(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0: np.ndarray | None,
+def static_q(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0: np.ndarray | None,
             flank: int = +1, w=None) -> tuple[np.ndarray, int]:
-    """Static equilibrium, robust by construction (see `solve_static`): returns (q, iterations)."""
+    """State vector q of the static equilibrium at input_rad [rad] under the record torque, robust by
+    construction (see `solve_static`; q0 a warm start, flank the zero-load flank): returns (q, iterations)."""
     w = model.work() if w is None else w
     th, turns = _reduce(model, input_rad)
-    shift = turns * _turn_shift(model)
+    shift = turns * turn_shift(model)
     T = float(record_torque_Nm)
     floor = ZERO_LOAD_FRACTION * model.case.rated_torque_Nm
     if abs(T) < floor:                   # zero load: vanishing preload on the given flank
@@ -231,7 +232,7 @@ def solve_static(model: ReducerModel, input_angle_deg: float, torque_Nm: float,
     if not math.isfinite(th) or not math.isfinite(torque_Nm):
         raise DynamicsError(f"solve_static: input angle {input_angle_deg!r} deg and torque "
                             f"{torque_Nm!r} N m must be finite")
-    q, it = _static(model, th, torque_Nm, q_guess, direction)
+    q, it = static_q(model, th, torque_Nm, q_guess, direction)
     return _state(model, q, th, torque_Nm, it)
 
 
@@ -258,7 +259,7 @@ def quasi_static(model: ReducerModel, input_angle_deg, torque_Nm, direction: int
         nom = nominal_q(model, th[i])
         guess = None if q is None else q + nom - nom_prev
         nom_prev = nom
-        q, _ = _static(model, th[i], T[i], guess, direction, w)
+        q, _ = static_q(model, th[i], T[i], guess, direction, w)
         carrier[i] = q[model.i_out]
         if pin_forces:
             evaluate(model, q, th[i], w=w)

@@ -44,6 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from fem import elastic, hertz
+from fem.joint_layers import JointLayers, joint_layer_tets, layer_material
 from fem.mesh import Mesh3D, MeshError, tet_mesh_from_solid, triangulate
 from geometry.carrier import CarrierGeometry
 
@@ -179,11 +180,13 @@ def carrier_mesh(g: CarrierGeometry, edge_length_m: float | None = None, *,
 
 
 # ----------------------------------------------------------------------------- assembly, solver
-def elasticity_matrix(mesh_sk, scalar_elem, vector_basis, E_Pa, nu: float, chunk: int = 4000) -> sp.csr_matrix:
-    """Isotropic elasticity with a modulus per tet on `vector_basis`'s DOF numbering: the form of
+def elasticity_matrix(mesh_sk, scalar_elem, vector_basis, E_Pa, nu, chunk: int = 4000,
+                      shear_xz_Pa=None) -> sp.csr_matrix:
+    """Isotropic elasticity with a modulus and a Poisson ratio per tet (or one for all) on `vector_basis`'s DOF numbering: the form of
     skfem.models.elasticity.linear_elasticity, a(u, v) = int lam div u div v + 2 mu eps(u):eps(v),
     from the scalar basis' gradients by one einsum per chunk (skfem's generic form, 900 pairs one by
-    one, measured 10x slower here); quadrature exact for affine tets (order 2p - 2)."""
+    one, measured 10x slower here); quadrature exact for affine tets (order 2p - 2). shear_xz_Pa: an
+    extra transverse shear modulus per tet on gamma_xz, gamma_yz (joint layers, fem.joint_layers)."""
     from skfem import Basis
     sb = Basis(mesh_sk, scalar_elem, intorder=max(2 * scalar_elem.maxdeg - 2, 1))
     if vector_basis.N != 3 * sb.N:
@@ -194,20 +197,29 @@ def elasticity_matrix(mesh_sk, scalar_elem, vector_basis, E_Pa, nu: float, chunk
             vdof[s_arr[0]] = v_arr.T
     G = np.stack([sb.basis[i][0].grad for i in range(sb.Nbfun)])   # (nloc, 3, nelem, nqp)
     ne = G.shape[2]
-    lam, mu = elastic.lame(1.0, nu)
     E = np.broadcast_to(np.asarray(E_Pa, float), (ne,))
+    nu_e = np.broadcast_to(np.asarray(nu, float), (ne,))
+    lam_e, mu_e = elastic.lame(1.0, nu_e)                      # per tet
     rows, cols, vals = [], [], []
     for e0 in range(0, ne, chunk):
         sl = slice(e0, min(e0 + chunk, ne))
         M = np.einsum("eq,aieq,bjeq->eaibj", sb.dx[sl] * E[sl, None], G[:, :, sl], G[:, :, sl], optimize=True)
+        lam, mu = lam_e[sl, None, None, None, None], mu_e[sl, None, None, None, None]
         Ke = lam * M + mu * M.transpose(0, 1, 4, 3, 2)
         Ke += mu * np.einsum("eakbk->eab", M)[:, :, None, :, None] * np.eye(3)[None, None, :, None, :]
+        if shear_xz_Pa is not None and np.any(shear_xz_Pa[sl]):   # + dG (u_i,z + u_z,i)(v_i,z + v_z,i), i = x, y
+            A = np.einsum("mik,akeq->maieq", _TRANSVERSE, G[:, :, sl], optimize=True)
+            Ke += np.einsum("eq,maieq,mbjeq->eaibj", sb.dx[sl] * shear_xz_Pa[sl, None], A, A, optimize=True)
         d = vdof[sb.element_dofs[:, sl].T]                      # (n, nloc, 3)
         rows.append(np.broadcast_to(d[:, :, :, None, None], Ke.shape).ravel())
         cols.append(np.broadcast_to(d[:, None, None, :, :], Ke.shape).ravel())
         vals.append(Ke.ravel())
     n = vector_basis.N
     return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+
+
+_TRANSVERSE = np.zeros((2, 3, 3))    # gamma_m = S[m, i, k] du_i/dx_k: gamma_xz, gamma_yz
+_TRANSVERSE[0, 0, 2] = _TRANSVERSE[0, 2, 0] = _TRANSVERSE[1, 1, 2] = _TRANSVERSE[1, 2, 1] = 1.0
 
 
 def node_ordered_lu_solve(K: sp.spmatrix, node: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -418,15 +430,17 @@ def seat_forces_per_Nm(crank_angles_rad, crank_circle_radius_m: float, flange_sh
     return f.ravel()
 
 
+# ----------------------------------------------------------------------------- joint layers
 # ----------------------------------------------------------------------------- the FE model
 def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_length_m: float | None = None,
                        order: int = 2, plate_modulus_factor: float = 1.0, mesher: str = "extruded",
                        mesh: tuple[Mesh3D, np.ndarray] | None = None, solver: str = "auto",
-                       rtol: float = 1e-10, clamp: str = "face") -> CarrierFE:
+                       rtol: float = 1e-10, clamp: str = "face", joints: JointLayers | None = None) -> CarrierFE:
     """The carrier's seat flexibility on one mesh (see module). plate_modulus_factor multiplies E
     in both plates (the rigid-plate check); mesh: (tets, regions) made beforehand; solver 'auto'
     (LU up to DIRECT_MAX_DOFS, else two-level PCG), 'direct' or 'pcg'. clamp: 'face' (the whole
-    mounting face) or 'bolt_annulus' (the what-if of a flange held by its bolts alone)."""
+    mounting face) or 'bolt_annulus' (the what-if of a flange held by its bolts alone). joints:
+    contact layers of the pillar joint and the mounting face (JointLayers; None: bonded)."""
     from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet
     if order not in (1, 2):
         raise ValueError(f"carrier element order = {order!r}: allowed 1, 2")
@@ -441,7 +455,17 @@ def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_lengt
     scalar = {1: ElementTetP1, 2: ElementTetP2}[order]()
     basis = Basis(msk, ElementVector(scalar))
     comp = _dof_components(basis)
-    K = elasticity_matrix(msk, scalar, basis, np.where(region == PILLAR, 1.0, plate_modulus_factor) * E_Pa, nu)
+    E_t = np.where(region == PILLAR, 1.0, plate_modulus_factor) * E_Pa
+    nu_t, dG = np.full(len(region), float(nu)), np.zeros(len(region))
+    if joints is not None and mesher == "extruded":
+        for name, (idx, hl) in joint_layer_tets(m3, region == PILLAR, region == FLANGE,
+                                                   g.mounting_face_z_mm * 1e-3).items():
+            kn, kt = getattr(joints, f"{name}_normal_Pa_per_m"), getattr(joints, f"{name}_tangential_Pa_per_m")
+            if kn is not None:
+                E_t[idx], nu_t[idx], dG[idx] = layer_material(hl, E_t[idx], nu, kn, kt)
+    elif joints is not None:
+        raise ValueError("carrier joints need the extruded mesh (its z-levels give the layers)")
+    K = elasticity_matrix(msk, scalar, basis, E_t, nu_t, shear_xz_Pa=dG if dG.any() else None)
     zf, rb, half = g.mounting_face_z_mm * 1e-3, g.bolt_circle_radius_mm * 1e-3, 0.5e-3 * BOLT_ANNULUS_WIDTH * g.bolt_circle_radius_mm
     held = lambda x: (x[2] > zf - 0.02 * h) & ((clamp == "face") | (abs(np.hypot(x[0], x[1]) - rb) <= half))  # noqa: E731
     fixed = basis.get_dofs(msk.facets_satisfying(held, boundaries_only=True)).all()
@@ -571,29 +595,3 @@ def convergence_study(g: CarrierGeometry, E_Pa: float, nu: float, *, sizes_per_p
             "extrapolated_compliance_rad_per_Nm": c_inf, "relative_error": err,
             "polyfit_slope": float(np.polyfit(np.log(h), np.log(err), 1)[0]),
             "seconds": np.array([r.mesh_seconds + r.solve_seconds for r in runs])}
-
-
-def case_figures(case, flange_share: float = 0.5) -> dict:
-    """What the report quotes for one case: stiffness, racking, matrix size and conditioning, cost."""
-    g, fe = carrier_for_case(case)
-    E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
-    return {"case": case.name, "flange_share": flange_share,
-            "torsional_stiffness_Nm_per_arcmin": fe.torsional_stiffness_Nm_per_arcmin(flange_share),
-            "torsional_compliance_rad_per_Nm": fe.torsional_compliance_rad_per_Nm(flange_share),
-            "racking_rad_per_Nm": fe.racking_rad_per_Nm(flange_share),
-            "end_plate_load_only_Nm_per_arcmin": fe.torsional_stiffness_Nm_per_arcmin(0.0),
-            "portal_frame_Nm_per_arcmin": portal_frame_reference(g, E, nu)["end_plate_stiffness_Nm_per_rad"]
-            / ARCMIN_PER_RAD,
-            "matrix_size": fe.compliance_m_per_N.shape[0], "condition_number": fe.condition_number,
-            "levels_edge_length_m": fe.extrapolation["edge_length_m"], "levels_dofs": fe.extrapolation["dofs"],
-            "levels_Nm_per_arcmin": [1 / (c * ARCMIN_PER_RAD) for c in
-                                     fe.extrapolation["torsional_compliance_rad_per_Nm"]],
-            "seconds": fe.mesh_seconds + fe.solve_seconds}
-
-
-if __name__ == "__main__":      # python -m fem.carrier cases/rv40e-81.toml [...]: the figures, as JSON
-    import json
-    import sys
-    from geometry.params import load_case
-    for path in sys.argv[1:]:
-        print(json.dumps(case_figures(load_case(path)), indent=1, default=float))

@@ -51,9 +51,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from fem import elastic, hertz
+from fem import hertz
 from fem.mesh import Mesh3D
-from fem.shaft import crankshaft_mesh, default_edge_length_m
+from fem.shaft import crankshaft_mesh, default_edge_length_m, p2_stiffness, pinned_solve
 from fem.tapered_roller import crank_support_positions_m
 from geometry.artifacts import InputError
 
@@ -225,17 +225,14 @@ def _zone_loads(basis, zone: LoadZone) -> list[np.ndarray]:
 def fe_flexibility(mesh3: Mesh3D, supports: Supports, zones: tuple[LoadZone, LoadZone],
                    E_Pa: float, nu: float, edge_length_m: float = 0.0) -> CrankFlexibility:
     """3D FE (P2) flexibility of a shaft pinned at `supports`, generalized loads on two zones."""
-    basis = elastic.basis_3d(mesh3, order=2)
-    K = elastic.stiffness(basis, E_Pa, nu)
+    basis, K = p2_stiffness(mesh3, E_Pa, nu)
     Cm = _support_constraints(basis, supports)
-    n, m = K.shape[0], Cm.shape[0]
+    n = K.shape[0]
     loads = [_zone_loads(basis, z) for z in zones]
     # column order of LABELS: F1x F1y F2x F2y S1x S1y S2x S2y
     F = np.column_stack([loads[0][0], loads[0][1], loads[1][0], loads[1][1],
                          loads[0][2], loads[0][3], loads[1][2], loads[1][3]])
-    fac = elastic.Factorized.of(sp.bmat([[K, Cm.T], [Cm, None]]).tocsr(), np.array([], int))
-    sol = fac.solve(np.vstack([F, np.zeros((m, F.shape[1]))]))
-    U, lam = sol[:n], sol[n:]
+    U, lam = pinned_solve(basis, K, Cm, F)
     C = F.T @ U
     asym = float(np.abs(C - C.T).max() / np.abs(C).max())   # Maxwell-Betti: round-off only
     # K u + Cm^T lam = f: the band carries -lam; the shaft pushes +lam into each bearing

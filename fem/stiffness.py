@@ -1,6 +1,6 @@
 """The stiffness artifact: what the FEM stage hands the dynamics stage (`stiffness.json`).
 
-Schema `rv-stiffness/3`, SI units in every key. Every compliance is an FE result of this project's
+Schema `rv-stiffness/4`, SI units in every key. Every compliance is an FE result of this project's
 own geometry or a closed form applied to stated geometry; `sources` says which, `checks` gives each
 one's FE-vs-closed-form comparison. No entry is scaled or fitted to a target.
 
@@ -38,7 +38,9 @@ made_from            what it was made from (geometry.fingerprint.Provenance: cas
                      mesh fingerprint); null only for models built in memory (tests). Read for a case
                      (`for_case`, `path_for_case`, `load(path, case)`), a file made from another case
                      or another version of it is refused. Schema 2 added made_from; schema 3 the support bearings,
-                     crank bending matrix, carrier and pin series parts (issue 11).
+                     crank bending matrix, carrier and pin series parts (issue 11); schema 4 `parts`: the
+                     entries of the components registered without a field of their own (joints,
+                     main_bearings, housing: fem.components, each with its to_json / from_json).
 
 Composition for the lumped model (pure functions of this file, so that the dynamics and the
 compliance budget read one definition): `support_compliance_parts` (crank-axis displacement per
@@ -51,90 +53,18 @@ from pathlib import Path
 
 import numpy as np
 
+from fem.components import COMPONENTS, REGISTRY, by_name, in_coupling
+from fem.components.entries import CarrierSeats, CrankBending, PinContact, PinSeries, SupportBearings, TurningArm
 from geometry.artifacts import InputError, read_json, write_json_atomic
 from geometry.fingerprint import Provenance
 
-SCHEMA = "rv-stiffness/3"
+SCHEMA = "rv-stiffness/4"
 
-# components of the compliance path, in path order (dynamics.budget splits the couplings into them)
-COMPONENTS = ("involute_mesh", "crank_torsion", "support_bearings", "crank_bending", "carrier",
-              "needle_bearings", "pin_contact", "disc_body", "pin_groove")
+# components of the compliance path, in path order: fem.components.REGISTRY (one module each)
 
 
 class StiffnessError(InputError):
     """A stiffness.json that does not follow the schema."""
-
-
-@dataclass(frozen=True)
-class PinContact:
-    position_deg: np.ndarray
-    load_N: np.ndarray
-    approach_m: np.ndarray
-    peak_pressure_Pa: np.ndarray
-    half_width_m: np.ndarray
-    law_k_N_per_m_pow: np.ndarray
-    law_n: np.ndarray
-
-    def force_N(self, approach_m: np.ndarray, position_deg: np.ndarray) -> np.ndarray:
-        """Normal force for an approach (<= 0 gives 0) at a pin phase, law interpolated in phase."""
-        pos = np.clip(np.abs((np.asarray(position_deg) + 180.0) % 360.0 - 180.0),
-                      self.position_deg[0], self.position_deg[-1])
-        k = np.interp(pos, self.position_deg, self.law_k_N_per_m_pow)
-        n = np.interp(pos, self.position_deg, self.law_n)
-        d = np.maximum(np.asarray(approach_m, dtype=float), 0.0)
-        return k * d ** n
-
-
-@dataclass(frozen=True)
-class TurningArm:
-    load_N: np.ndarray
-    deflection_m: np.ndarray
-    law_k_N_per_m_pow: float
-    law_n: float
-
-
-@dataclass(frozen=True)
-class SupportBearings:
-    """One crank support bearing (two per crank, one at each journal), radial."""
-    designation: str
-    roller_count: int
-    roller_length_m: float
-    roller_diameter_m: float
-    contact_angle_deg: float
-    preload_N: float
-    load_N: np.ndarray
-    deflection_m: np.ndarray
-    operating_load_N: float
-    stiffness_N_per_m: float          # tangent at operating_load_N: the model's spring per bearing
-
-
-@dataclass(frozen=True)
-class CrankBending:
-    compliance_m_per_N: np.ndarray    # (2, 2) eccentric i per N on eccentric j, shaft alone, pinned
-    journal_force: np.ndarray         # (2, 2) journal s (J1 end plate, J2 flange) per N on eccentric i
-
-
-@dataclass(frozen=True)
-class CarrierSeats:
-    compliance_m_per_N: np.ndarray    # (4 nc, 4 nc) crank, seat (flange, end plate), (x, y)
-
-
-@dataclass(frozen=True)
-class PinSeries:
-    disc_body_compliance_m_per_N: float
-    groove_load_N: np.ndarray
-    groove_approach_m: np.ndarray
-
-    def groove_m(self, force_N):
-        """Housing approach at a pin force (power law through the table's ends beyond it)."""
-        F = np.atleast_1d(np.maximum(np.asarray(force_N, float), 0.0))
-        L, d = self.groove_load_N, self.groove_approach_m
-        n = np.log(d[-1] / d[0]) / np.log(L[-1] / L[0])
-        out = np.interp(F, L, d)
-        lo, hi = F < L[0], F > L[-1]
-        out[lo] = d[0] * (F[lo] / L[0]) ** n
-        out[hi] = d[-1] * (F[hi] / L[-1]) ** n
-        return out
 
 
 @dataclass(frozen=True)
@@ -151,6 +81,8 @@ class StiffnessModel:
     crank_bending: CrankBending = None
     carrier: CarrierSeats = None
     pin_series: PinSeries = None
+    parts: dict = field(default_factory=dict)     # component name -> its entry, for the components without a
+                                                  # field above (fem.components: to_json / from_json)
     sources: dict = field(default_factory=dict)   # quantity -> where it comes from
     checks: dict = field(default_factory=dict)    # entry -> FE figure beside its closed form
     extras: dict = field(default_factory=dict)    # mesh sizes, convergence (free form)
@@ -163,40 +95,19 @@ class StiffnessModel:
     def stiffened(self, component: str, factor: float) -> "StiffnessModel":
         """A copy with one component's compliance divided by `factor` (component in COMPONENTS, or
         "all"): what-if studies and the diagnosis' located compliances."""
-        import dataclasses as dc
-        if component == "all":
-            m = self
-            for c in COMPONENTS:
-                m = m.stiffened(c, factor)
-            return m
         f = float(factor)
         if not (np.isfinite(f) and f > 0):
             raise ValueError(f"stiffening factor {factor!r}: must be finite and > 0")
-        pc, ta, ps = self.pin_contact, self.turning_arm, self.pin_series
-        if component == "involute_mesh":
-            return dc.replace(self, involute_mesh_mean_stiffness_N_per_m=self.involute_mesh_mean_stiffness_N_per_m * f)
-        if component == "crank_torsion":
-            return dc.replace(self, crankshaft_torsional_stiffness_Nm_per_rad=self.crankshaft_torsional_stiffness_Nm_per_rad * f)
-        if component == "support_bearings":
-            sb = self.support_bearings
-            return dc.replace(self, support_bearings=dc.replace(sb, deflection_m=sb.deflection_m / f,
-                                                                stiffness_N_per_m=sb.stiffness_N_per_m * f))
-        if component == "crank_bending":
-            return dc.replace(self, crankshaft_bending_stiffness_N_per_m=self.crankshaft_bending_stiffness_N_per_m * f,
-                              crank_bending=dc.replace(self.crank_bending, compliance_m_per_N=self.crank_bending.compliance_m_per_N / f))
-        if component == "carrier":
-            return dc.replace(self, carrier=CarrierSeats(self.carrier.compliance_m_per_N / f))
-        if component == "needle_bearings":
-            return dc.replace(self, turning_arm=dc.replace(ta, deflection_m=ta.deflection_m / f,
-                                                           law_k_N_per_m_pow=ta.law_k_N_per_m_pow * f ** ta.law_n))
-        if component == "pin_contact":
-            return dc.replace(self, pin_contact=dc.replace(pc, approach_m=pc.approach_m / f,
-                                                           law_k_N_per_m_pow=pc.law_k_N_per_m_pow * f ** pc.law_n))
-        if component == "disc_body":
-            return dc.replace(self, pin_series=dc.replace(ps, disc_body_compliance_m_per_N=ps.disc_body_compliance_m_per_N / f))
-        if component == "pin_groove":
-            return dc.replace(self, pin_series=dc.replace(ps, groove_approach_m=ps.groove_approach_m / f))
-        raise ValueError(f"component {component!r}: allowed {', '.join(COMPONENTS)} or 'all'")
+        if component == "all":
+            m = self
+            for c in REGISTRY:
+                m = c.stiffen(m, f)
+            return m
+        try:
+            comp = by_name(component)
+        except ValueError:
+            raise ValueError(f"component {component!r}: allowed {', '.join(COMPONENTS)} or 'all'") from None
+        return comp.stiffen(self, f)
 
     def to_json(self) -> dict:
         pc, ta = self.pin_contact, self.turning_arm
@@ -224,6 +135,7 @@ class StiffnessModel:
             "involute_mesh": {"mean_stiffness_N_per_m": float(self.involute_mesh_mean_stiffness_N_per_m),
                               "stiffness_variation": float(self.involute_mesh_stiffness_variation),
                               "contact_ratio": float(self.involute_mesh_contact_ratio)},
+            "parts": {k: by_name(k).to_json(v) for k, v in self.parts.items()},
             "sources": self.sources,
             "checks": self.checks,
             "extras": self.extras,
@@ -259,10 +171,15 @@ class StiffnessModel:
                 pin_series=PinSeries(float(data["pin_series"]["disc_body_compliance_m_per_N"]),
                                      np.asarray(data["pin_series"]["groove_load_N"], float),
                                      np.asarray(data["pin_series"]["groove_approach_m"], float)),
+                parts={k: by_name(k).from_json(v) for k, v in data.get("parts", {}).items()},
                 sources=data.get("sources", {}), checks=data.get("checks", {}), extras=data.get("extras", {}),
                 made_from=made)
-        except (KeyError, TypeError) as exc:
+        except (KeyError, TypeError, ValueError) as exc:
             raise StiffnessError(f"{where}: missing or malformed entry {exc}") from None
+        missing = [c.NAME for c in REGISTRY if hasattr(c, "to_json") and c.NAME not in model.parts]
+        if missing:
+            raise StiffnessError(f"{where}: no parts entry for {', '.join(missing)} (schema {SCHEMA} needs every "
+                                 f"component of the path): rebuild it with `python -m pipeline fem`")
         model.check(where)
         return model
 
@@ -330,24 +247,13 @@ def seat_transfer(model: StiffnessModel, n_crank: int) -> np.ndarray:
 def support_compliance_parts(model: StiffnessModel, n_crank: int) -> dict:
     """The crank support path as compliances between the eccentric forces and the crank axis
     displacement at each disc plane (crank j, plane d, x, y; carrier frame), one matrix per
-    component, summing to the path's compliance (loads reach the carrier through the bearings):
-      crank_bending     shaft alone, pinned at the supports' pressure centres (isotropic: x and y alike);
-      support_bearings  T^T (1/k_b) T, each bearing an isotropic radial spring at its seat;
-      carrier           T^T C_car T, the seats' flexibility (racking couples the cranks)."""
-    Cb = model.crank_bending.compliance_m_per_N
-    nd = Cb.shape[0]
-    n = 2 * n_crank * nd
+    component of the support coupling (fem.components: `support_part`), summing to the path's
+    compliance (loads reach the carrier through the bearings; T the crank statics, seat_transfer)."""
     if model.carrier.compliance_m_per_N.shape != (4 * n_crank, 4 * n_crank):
         raise StiffnessError(f"carrier compliance has shape {model.carrier.compliance_m_per_N.shape}: "
                              f"expected ({4 * n_crank}, {4 * n_crank}) for {n_crank} cranks")
     T = seat_transfer(model, n_crank)
-    bend = np.zeros((n, n))
-    for j in range(n_crank):
-        s = slice(2 * nd * j, 2 * nd * (j + 1))
-        bend[s, s] = np.kron(0.5 * (Cb + Cb.T), np.eye(2))
-    return {"crank_bending": bend,
-            "support_bearings": T.T @ T / model.support_bearings.stiffness_N_per_m,
-            "carrier": T.T @ model.carrier.compliance_m_per_N @ T}
+    return {c.NAME: c.support_part(model, T, n_crank) for c in in_coupling("support")}
 
 
 def support_stiffness_matrix(model: StiffnessModel, n_crank: int) -> np.ndarray:
@@ -358,22 +264,29 @@ def support_stiffness_matrix(model: StiffnessModel, n_crank: int) -> np.ndarray:
 
 
 def pin_series_tangents(model: StiffnessModel, force_N, law_k, law_n) -> dict:
-    """Tangent compliances d(approach)/dF [m/N] of the parts in series at one cycloid-pin contact."""
+    """Tangent compliances d(approach)/dF [m/N] of the parts in series at one cycloid-pin contact:
+    the tooth pair on its law (k, n at the contact's phase) and every other pin component's
+    `series_approach_m` (central difference)."""
     F = np.maximum(np.asarray(force_N, float), 1e-9)
-    ps = model.pin_series
     dF = 1e-3 * F
-    return {"pin_contact": F ** (1.0 / law_n - 1.0) / (law_n * law_k ** (1.0 / law_n)),
-            "disc_body": np.full_like(F, ps.disc_body_compliance_m_per_N),
-            "pin_groove": (ps.groove_m(F + dF) - ps.groove_m(F - dF)) / (2 * dF)}
+    out = {}
+    for c in in_coupling("pin"):
+        if c.NAME == "pin_contact":
+            out[c.NAME] = c.tangent_m_per_N(F, law_k, law_n)
+        else:
+            out[c.NAME] = (c.series_approach_m(model, F + dF) - c.series_approach_m(model, F - dF)) / (2 * dF)
+    return out
 
 
 def pin_law(model: StiffnessModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The cycloid-pin law the lumped model uses, per pin phase: F = k a^n refitted (log-log least
-    squares over the tabulated loads) to the total approach tooth pair FE + disc body + groove.
-    Returns (position_deg, k, n, max relative force error of the refit over the table)."""
-    pc, ps = model.pin_contact, model.pin_series
+    squares over the tabulated loads) to the total approach: tooth pair FE + every pin component in
+    series (fem.components, `series_approach_m`). Returns (position_deg, k, n, max relative force
+    error of the refit over the table)."""
+    pc = model.pin_contact
     L = pc.load_N
-    total = pc.approach_m + ps.disc_body_compliance_m_per_N * L[None, :] + ps.groove_m(L)[None, :]
+    total = pc.approach_m + sum(np.asarray(c.series_approach_m(model, L), float)[None, :]
+                                for c in in_coupling("pin") if c.NAME != "pin_contact")
     k, n, err = np.zeros(len(pc.position_deg)), np.zeros(len(pc.position_deg)), np.zeros(len(pc.position_deg))
     for i, a in enumerate(total):
         nn, lk = np.polyfit(np.log(a), np.log(L), 1)
@@ -440,7 +353,7 @@ def _read_json(path: Path) -> dict:
     return data
 
 
-__all__ = ["SCHEMA", "COMPONENTS", "StiffnessModel", "PinContact", "TurningArm", "SupportBearings",
+__all__ = ["SCHEMA", "COMPONENTS", "REGISTRY", "in_coupling", "StiffnessModel", "PinContact", "TurningArm", "SupportBearings",
            "CrankBending", "CarrierSeats", "PinSeries", "support_compliance_parts", "support_stiffness_matrix",
            "pin_law", "pin_series_tangents", "StiffnessError", "save", "load",
            "for_case", "path_for_case", "check_made_from"]

@@ -13,6 +13,7 @@ no cusp, no undercut of the modified profile, from the closed-form curvature of
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
 import tomllib
@@ -22,8 +23,12 @@ from typing import Any
 
 import numpy as np
 
-from geometry import spur
-from geometry.artifacts import InputError
+from geometry import params_assembly, spur
+from geometry.artifacts import read_text
+from geometry.case_fields import CaseError, ranged as _f, where as _where
+from geometry.case_si import CaseSI, case_si
+from geometry.lubrication import Lubrication
+from geometry.params_assembly import Joints, MainBearings
 from geometry.pin_profile import min_convex_radius_mm
 
 # Largest pin count accepted. Real cycloid reducers stay below it: RV reducers carry ~40 pins and
@@ -33,22 +38,6 @@ from geometry.pin_profile import min_convex_radius_mm
 ZP_MAX = 120
 NAME_PATTERN = re.compile(r"[A-Za-z0-9._-]{1,100}")   # the name becomes the build folder's name
 CASE_FILE_MAX_BYTES = 1 << 20                           # a case file is a few kB of TOML
-
-
-class CaseError(InputError):
-    """A case file that cannot describe a buildable reducer; the message names key, value, range."""
-
-
-def _f(lo: float | None = None, hi: float | None = None, *, open_lo: bool = True,
-       open_hi: bool = False, why: str = "", default: Any = dataclasses.MISSING) -> Any:
-    """A field with an allowed range (open at lo by default: sizes must be positive); `why` is
-    added to the message when a value falls outside."""
-    md = {"lo": lo, "hi": hi, "open_lo": open_lo, "open_hi": open_hi, "why": why}
-    if default is dataclasses.MISSING:
-        return field(metadata=md)
-    if isinstance(default, (list, tuple)):
-        return field(default=tuple(default), metadata=md)
-    return field(default=default, metadata=md)
 
 
 @dataclass(frozen=True)
@@ -115,6 +104,17 @@ class Crankshaft:
     needle_diameter_mm: float = _f(0.0)
     needle_length_mm: float = _f(0.0)
     needle_count: int = _f(4, open_lo=False)
+
+
+@dataclass(frozen=True)
+class Housing:
+    """The pin ring as an elastic body (fem.housing): wall, mounting flange, bolts (clamped)."""
+    pin_ring_outer_radius_mm: float = _f(0.0)   # housing wall outside the groove circle
+    pin_ring_length_mm: float = _f(0.0)         # axial length of the pin ring: both discs plus spacing
+    flange_outer_radius_mm: float = _f(0.0)     # mounting flange
+    bolt_count: int = _f(3, 64, open_lo=False, why="fewer than 3 do not clamp a flange in its plane")
+    bolt_circle_radius_mm: float = _f(0.0)
+    bolt_hole_radius_mm: float = _f(0.0)        # clearance hole (the clamped edge)
 
 
 @dataclass(frozen=True)
@@ -263,10 +263,11 @@ class Tolerances:
 
 SECTIONS: dict[str, type] = {
     "cycloid": Cycloid, "modification": Modification, "stage1": Stage1, "carrier": Carrier,
-    "disc": Disc, "crankshaft": Crankshaft, "material": Material, "operation": Operation,
-    "dynamics": Dynamics, "errors": Errors, "tolerances": Tolerances,
+    "disc": Disc, "crankshaft": Crankshaft, "housing": Housing, "material": Material,
+    "operation": Operation, "dynamics": Dynamics, "joints": Joints, "main_bearings": MainBearings,
+    "errors": Errors, "tolerances": Tolerances, "lubrication": Lubrication,
 }
-OPTIONAL_SECTIONS = ("errors", "tolerances")
+OPTIONAL_SECTIONS = ("errors", "tolerances", "lubrication")
 
 
 @dataclass(frozen=True)
@@ -278,11 +279,15 @@ class ReducerCase:
     carrier: Carrier
     disc: Disc
     crankshaft: Crankshaft
+    housing: Housing
     material: Material
     operation: Operation
     dynamics: Dynamics
+    joints: Joints
+    main_bearings: MainBearings
     errors: Errors = Errors()
     tolerances: Tolerances = Tolerances()
+    lubrication: Lubrication = Lubrication()   # read by dynamics.losses only: not fingerprinted
     source: str = ""   # path the case was read from, for messages
 
     @property
@@ -293,6 +298,11 @@ class ReducerCase:
     @property
     def rated_torque_Nm(self) -> float:
         return self.operation.rated_torque_Nm
+
+    @functools.cached_property
+    def si(self) -> CaseSI:
+        """The sizes in SI units (m, Pa), converted once (geometry.case_si)."""
+        return case_si(self)
 
     def with_errors(self, **changes: Any) -> "ReducerCase":
         """A copy with some error sources changed (validated like the case file)."""
@@ -311,12 +321,8 @@ class ReducerCase:
         return out
 
     def to_dict(self) -> dict:
-        """The content the case fingerprint hashes: every section but `tolerances` (see Tolerances)."""
-        return {k: v for k, v in dataclasses.asdict(self).items() if k not in ("source", "tolerances")}
-
-
-def _where(section: str, key: str, source: str) -> str:
-    return f"{source + ': ' if source else ''}[{section}] {key}"
+        """The content the case fingerprint hashes: every section but `tolerances` and `lubrication`."""
+        return {k: v for k, v in dataclasses.asdict(self).items() if k not in ("source", "tolerances", "lubrication")}
 
 
 def _build(cls: type, data: dict, section: str, source: str) -> Any:
@@ -489,10 +495,33 @@ def validate(case: ReducerCase) -> ReducerCase:
         raise CaseError(f"{w('operation', 'momentary_torque_Nm')} = {op.momentary_torque_Nm:g}: the momentary "
                         f"maximum must exceed the rated torque ({op.rated_torque_Nm:g} N m); allowed > "
                         f"{op.rated_torque_Nm:g}")
+    _check_housing(case)
     _check_errors(case)
+    bad = params_assembly.check(case.joints, case.main_bearings, w)
+    if bad:
+        raise CaseError(bad[0])
     _check_undercut(case)
     _check_stage1(case)
     return case
+
+
+def _check_housing(case: ReducerCase) -> None:
+    """Ring wall outside the grooves, as long as the disc stack; bolt holes apart, between wall and rim."""
+    h, c, r = case.housing, case.cycloid, case.housing.bolt_hole_radius_mm
+    groove, stack, b = c.pin_circle_radius_mm + c.pin_radius_mm, c.disc_count * c.width_mm, h.bolt_circle_radius_mm
+    gap = b * math.sin(math.pi / h.bolt_count)
+    for key, ok, why in (("pin_ring_outer_radius_mm", h.pin_ring_outer_radius_mm > groove, f"the wall must lie outside "
+                          f"the groove bottoms (pin circle + pin radius); allowed > {groove:g}"),
+                         ("pin_ring_length_mm", h.pin_ring_length_mm >= stack, f"the pin ring must span the disc "
+                          f"stack (disc_count x width); allowed >= {stack:g}"),
+                         ("bolt_circle_radius_mm", b - r > h.pin_ring_outer_radius_mm, f"the bolt holes (radius {r:g} "
+                          f"mm) cut the ring wall; allowed > {h.pin_ring_outer_radius_mm + r:g}"),
+                         ("flange_outer_radius_mm", h.flange_outer_radius_mm > b + r, f"the bolt holes reach the "
+                          f"flange rim; allowed > {b + r:g} (bolt circle + hole radius)"),
+                         ("bolt_hole_radius_mm", r < gap, f"{h.bolt_count} holes on the {b:g} mm circle overlap; "
+                          f"allowed < {gap:.4g}")):
+        if not ok:
+            raise CaseError(f"{_where('housing', key, case.source)} = {getattr(h, key):g}: {why}")
 
 
 def _check_stage1(case: ReducerCase) -> None:
@@ -534,25 +563,12 @@ def _check_undercut(case: ReducerCase) -> None:
 def load_case(path: str | Path) -> ReducerCase:
     """Read and validate a case file; raise CaseError naming key, value and allowed range."""
     path = Path(path)
+    text = read_text(path, what="case", error=CaseError, allowed="a case file is TOML text",
+                     max_bytes=CASE_FILE_MAX_BYTES,
+                     wording={"missing": "case file not found", "folder": "is a directory, not a case file",
+                              "not_utf8": "not a UTF-8 text file (byte {offset})"})
     try:
-        if path.is_dir():
-            raise CaseError(f"{path}: is a directory; expected a case file (TOML)")
-        if path.exists() and not path.is_file():
-            raise CaseError(f"{path}: not a regular file; expected a case file (TOML)")
-        if path.exists() and path.stat().st_size > CASE_FILE_MAX_BYTES:
-            raise CaseError(f"{path}: {path.stat().st_size} bytes; a case file is TOML text of at "
-                            f"most {CASE_FILE_MAX_BYTES} bytes")
-        text = path.read_bytes().decode("utf-8-sig")
         raw = tomllib.loads(text)
-    except FileNotFoundError:
-        raise CaseError(f"{path}: case file not found") from None
-    except PermissionError:
-        raise CaseError(f"{path}: cannot read the case file (permission denied)") from None
-    except OSError as exc:
-        raise CaseError(f"{path}: cannot read the case file ({exc.strerror or exc})") from None
-    except UnicodeDecodeError as exc:
-        raise CaseError(f"{path}: not a UTF-8 text file (byte {exc.start}); a case file is TOML "
-                        f"text") from None
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"{path}: not valid TOML ({' '.join(str(exc).split())})") from None
     return case_from_dict(raw, source=str(path))

@@ -30,6 +30,7 @@ COMMANDS = {
     "diagnose": ("pipeline.cmd_diagnose", "measured records -> causes, extension, gain"),
     "compensate": ("pipeline.cmd_compensate", "diagnosis' extended model -> TE compensation table, checked on records"),
     "paper001": ("pipeline.cmd_diagnose", "paper 001's no-load bench case: coaxiality that closes the gap"),
+    "conditions": ("pipeline.cmd_conditions", "operating map: TE gap, efficiency, input torque per condition (friction, lubrication)"),
     "sensitivity": ("pipeline.cmd_sensitivity", "catalog rigidity against each size of the case (what a teardown would have to find)"),
     "report": ("pipeline.cmd_report", "static HTML report of a case"),
 }

@@ -1,7 +1,7 @@
 """`simulate`, `matrix`, `hysteresis`: the dynamics stage's commands (DESIGN.md CLI contracts).
 
   python -m pipeline simulate --case CASE.toml --load FORM:TORQUE_NM [--duration S] [--speed-rpm N] --out RECORD.csv
-  python -m pipeline matrix --case CASE.toml --out DIR [--scheduler ADDRESS]
+  python -m pipeline matrix --case CASE.toml --out DIR [--forms F1,F2,...] [--scheduler ADDRESS]
   python -m pipeline hysteresis --case CASE.toml --out DIR
 The stiffness comes from the FEM stage (default build/<case name>/fem/stiffness.json).
 """
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geometry.artifacts import write_json_atomic, write_text_atomic
+from geometry.artifacts import InputError, write_json_atomic, write_text_atomic
 
 
 def _model(args):
@@ -72,44 +72,69 @@ def cmd_simulate(args) -> int:
 def _sigma_text(res) -> str:
     """TE sigma over the steady window, or why there is none (a run that ends before it starts)."""
     from dynamics.matrix import STEADY_FROM_S as steady_from_s
-    # at least one period of the slowest load form (the 1 Hz square wave): a shorter window's sigma
-    # (a 2 s run leaves one sample: "0 arcsec") says nothing
+    from dynamics.loads import LOAD_FORMS
+    # at least one period of the slowest load form (1 s: the square wave): a shorter window's
+    # sigma (a 2 s run leaves one sample: "0 arcsec") says nothing
+    need = max(1.0 / f.frequency_Hz for f in LOAD_FORMS.values() if f.frequency_Hz)
     span = res.t_s[-1] - steady_from_s
-    if span >= 1.0:
+    if span >= need:
         return f"TE sigma (t >= {steady_from_s:g} s) = {res.std_arcsec(steady_from_s):.4g} arcsec"
     what = (f"is empty in a {res.t_s[-1]:.3g} s run" if span <= 0 else
-            f"spans only {span:.3g} s of a {res.t_s[-1]:.3g} s run (needs >= 1 s, one period of the 1 Hz square load)")
+            f"spans only {span:.3g} s of a {res.t_s[-1]:.3g} s run (needs >= {need:g} s, one period of the "
+            "slowest load form)")
     return (f"no steady TE sigma: the window t >= {steady_from_s:g} s {what} "
             f"(whole run incl. the ramps: sigma {res.std_arcsec():.4g} arcsec)")
 
 
-def _plot_te(results, case, out: Path) -> None:
+def _plot_te(results, case, out: Path, forms: tuple[str, ...]) -> None:
     """te_matrix.png: TE against output angle per load form (ramps cut) and its order spectra."""
-    from dynamics.loads import FORMS
+    from dynamics.loads import PAPER_001_FORMS, load_form
     from dynamics.matrix import STEADY_FROM_S, characteristic_orders
     from pipeline.figures import te_matrix
+    from pipeline.matrix_cache import read_cell
     cells = []
     for r in results:
-        d = np.load(out / f"{r['name']}.npz")
+        d = read_cell(out, r["name"])
         cell = {"form": r["form"], "torque_Nm": r["torque_Nm"], "t_s": d["t_s"],
                 "output_angle_deg": d["output_angle_deg"], "te_arcsec": d["te_arcsec"]}
         if r["spectrum"] is not None:
             cell["order"], cell["amplitude"] = r["spectrum"]
             steady = d["t_s"] >= STEADY_FROM_S      # the load's own order: its frequency over the output's
             rev_per_s = abs(np.ptp(d["output_angle_deg"][steady])) / 360.0 / np.ptp(d["t_s"][steady])
-            hz = {"square": 1.0, "sine": 8.0 / (2 * np.pi)}.get(r["form"])   # paper 001's load forms
+            hz = load_form(r["form"]).frequency_Hz
             cell["load_order"] = hz / rev_per_s if hz else None
         cells.append(cell)
-    te_matrix(out / "te_matrix.png", cells, characteristic_orders(case), FORMS, steady_from_s=STEADY_FROM_S,
-              title=f"{case.name}: transmission error, paper 001's load forms (one colour per torque)")
+    what = "paper 001's load forms" if forms == PAPER_001_FORMS else "load forms " + ", ".join(forms)
+    te_matrix(out / "te_matrix.png", cells, characteristic_orders(case), forms, steady_from_s=STEADY_FROM_S,
+              title=f"{case.name}: transmission error, {what} (one colour per torque)")
+
+
+def _forms(text: str) -> tuple[str, ...]:
+    """--forms F1,F2,...: names of dynamics.loads' table, each once."""
+    from dynamics.loads import FORMS, load_form
+    forms = tuple(f.strip().lower() for f in str(text).split(","))
+    for f in forms:
+        if not f:
+            raise InputError(f"--forms {text!r}: an empty name; expected a comma-separated list of {', '.join(FORMS)}")
+        load_form(f)
+    if len(set(forms)) < len(forms):
+        raise InputError(f"--forms {text!r}: a form named twice; each of {', '.join(FORMS)} at most once")
+    return forms
+
+
+def _paper(form: str, torque_Nm: float) -> str:
+    """Paper 001's sigma of a cell, or that it has none."""
+    from dynamics.matrix import paper001_sigma_arcsec
+    v = paper001_sigma_arcsec(form, torque_Nm)
+    return "no paper figure" if v is None else f"{v:.3f}"
 
 
 def cmd_matrix(args) -> int:
-    from dynamics.loads import FORMS
-    from dynamics.matrix import (PAPER_001_SIGMA_ARCSEC, STEADY_FROM_S, TORQUES_NM, characteristic_orders,
-                                 run_matrix, sigma_table)
+    from dynamics.matrix import STEADY_FROM_S, TORQUES_NM, characteristic_orders, sigma_table
     from pipeline import checks
+    from pipeline.matrix_cache import run_matrix
     from pipeline.sweep import check_scheduler, run_tasks
+    forms = _forms(args.forms)
     check_scheduler(args.scheduler)
     checks.run_length(args.duration, args.dt, _default_dt_s)
     model, spath = _model(args)
@@ -121,12 +146,12 @@ def cmd_matrix(args) -> int:
                                progress=None if args.quiet else lambda i, n: print(f"matrix: {i}/{n}", flush=True))
     # each cell is its own artifact: finished cells with the same inputs are reused (resume)
     results, reused = run_matrix(str(Path(args.case).resolve()), str(spath.resolve()), args.duration,
-                                 str(out.resolve()), args.dt, runner)
+                                 str(out.resolve()), args.dt, runner, forms)
     wall = time.perf_counter() - t0
-    tab, whole = sigma_table(results), sigma_table(results, "sigma_whole_arcsec")
-    last = sigma_table(results, "sigma_last_rev_arcsec")
+    tab, whole = sigma_table(results, forms=forms), sigma_table(results, "sigma_whole_arcsec", forms)
+    last = sigma_table(results, "sigma_last_rev_arcsec", forms)
     for name, t in (("te_std.csv", tab), ("te_std_last_rev.csv", last), ("te_std_whole.csv", whole)):
-        write_text_atomic(out / name, _sigma_csv(t, FORMS, TORQUES_NM))
+        write_text_atomic(out / name, _sigma_csv(t, forms, TORQUES_NM))
     orders = characteristic_orders(case)
     kind = "TEST STAND-IN" if "STAND-IN" in str(model.stiffness.sources) else "FE"
     lines = ["# TE standard deviation: this model beside paper 001", "",
@@ -135,11 +160,11 @@ def cmd_matrix(args) -> int:
              f"Windows: **steady** t >= {STEADY_FROM_S:g} s (after the speed and load ramps; `te_std.csv`), "
              "**last rev** the last full output revolution of the run (`te_std_last_rev.csv`; 2.95..7 s at "
              "88.89 deg/s), **whole** the whole run including the ramps (`te_std_whole.csv`).", "",
-             "| torque N m | " + " | ".join(f"{f} steady | {f} last rev | {f} whole | {f} paper 001" for f in FORMS)
-             + " |", "|---" * (1 + 4 * len(FORMS)) + "|"]
+             "| torque N m | " + " | ".join(f"{f} steady | {f} last rev | {f} whole | {f} paper 001" for f in forms)
+             + " |", "|---" * (1 + 4 * len(forms)) + "|"]
     for i, T in enumerate(TORQUES_NM):
-        cells = [f"{tab[i, j]:.3f} | {last[i, j]:.3f} | {whole[i, j]:.3f} | {PAPER_001_SIGMA_ARCSEC[i, j]:.3f}"
-                 for j in range(len(FORMS))]
+        cells = [f"{tab[i, j]:.3f} | {last[i, j]:.3f} | {whole[i, j]:.3f} | {_paper(f, T)}"
+                 for j, f in enumerate(forms)]
         lines.append(f"| {T:g} | " + " | ".join(cells) + " |")
     lines += ["", "What paper 001's numbers can and cannot be compared with:", "",
               "- Paper 001 analyses TE \"for one rotation of the output flange\" of a 7 s run at 88.89 deg/s "
@@ -153,14 +178,14 @@ def cmd_matrix(args) -> int:
               "- Sigma of the constant-load run is the mesh ripple only (the windup is a constant offset); "
               "square and sine add the windup swing of +-5 % T. A square wave's RMS is its amplitude, a "
               "sine's amplitude / sqrt 2: where the swing dominates, square / sine -> 1.41 (ours: "
-              f"{np.mean(tab[:, 1] / tab[:, 2]):.2f}); paper 001 has sine > square, so its sigma is not "
+              f"{_ratio(tab, forms, 'square', 'sine')}); paper 001 has sine > square, so its sigma is not "
               "dominated by the load swing.",
               f"- Steady and last-revolution windows differ here by at most {_max_rel_pct(last, tab)} "
               "(both start after the ramps; n/a: runs shorter than one output revolution).",
               "- Paper 001's sigma of ~14 arcsec at 100 N m is far above a windup ripple: it likely contains "
               "the kinematic error of its profile/modification (TE at no load), which depends on a geometry "
               "the paper does not give. Our values cannot confirm or refute its absolute level."]
-    lines += _paper001_like(results, case, out)
+    lines += _paper001_like(results, case, out, forms)
     lines += ["", "Characteristic-order amplitudes of TE [arcsec] (steady part):", "",
               "| run | " + " | ".join(orders) + " |", "|---" * (1 + len(orders)) + "|"]
     for r in results:
@@ -170,19 +195,30 @@ def cmd_matrix(args) -> int:
     write_json_atomic(out / "matrix.json", {"made_from": _made_from(model, "rv-matrix/1").to_json(),
                                             "runs": [
         {k: v for k, v in r.items() if k != "spectrum"} for r in results]})
-    _plot_te(results, case, out)
+    _plot_te(results, case, out, forms)
     short = "" if args.duration >= STEADY_FROM_S else f"; runs end before t = {STEADY_FROM_S:g} s: no steady sigma (nan)"
     _say(args, f"matrix: {out}/te_std.csv, comparison.md ({len(results) - reused} cells computed, {reused} reused "
                f"from an earlier run; {wall:.1f} s wall{short})")
     return 0
 
 
-def _paper001_like(results, case, out: Path) -> list[str]:
+def _ratio(tab, forms: tuple[str, ...], a: str, b: str) -> str:
+    """Mean ratio of two forms' sigma columns (by name), n/a where the matrix lacks one."""
+    if a not in forms or b not in forms:
+        return "n/a"
+    return f"{np.mean(tab[:, forms.index(a)] / tab[:, forms.index(b)]):.2f}"
+
+
+def _paper001_like(results, case, out: Path, forms: tuple[str, ...]) -> list[str]:
     """comparison.md: paper 001's TE definition and 100 Hz sampling applied to our runs, and where
     each characteristic order lands at 100 Hz."""
-    from dynamics.loads import FORMS
-    from dynamics.matrix import PAPER_001_SIGMA_ARCSEC, PAPER_001_STEP_S, TORQUES_NM, aliasing, paper001_sigmas
-    sig = {(r["torque_Nm"], r["form"]): paper001_sigmas(out / f"{r['name']}.npz", case.ratio) for r in results}
+    from dynamics.matrix import PAPER_001_STEP_S, TORQUES_NM, aliasing, paper001_sigmas
+    from pipeline.matrix_cache import read_cell
+
+    def sigmas(name):
+        d = read_cell(out, name)
+        return paper001_sigmas(d["t_s"], d["input_angle_deg"], d["output_angle_deg"], d["te_arcsec"], case.ratio)
+    sig = {(r["torque_Nm"], r["form"]): sigmas(r["name"]) for r in results}
     L = ["", "## Paper 001 like for like", "",
          "Paper 001 defines TE per output step as dphi(t) = (omega_out - omega_in / i) * dt with 700 steps over "
          f"7 s (dt = {PAPER_001_STEP_S:g} s, 100 Hz) and takes its population sigma over one output revolution. "
@@ -190,13 +226,13 @@ def _paper001_like(results, case, out: Path) -> list[str]:
          "**ours** = sigma of theta_out - theta_in / i (our definition), **paper dphi** = sigma of the per-step "
          "figure as printed, **summed** = sigma of its running sum (what 'integrating' would give), beside paper "
          "001's table [arcsec].", "",
-         "| torque N m | " + " | ".join(f"{f} ours | {f} paper dphi | {f} summed | {f} paper 001" for f in FORMS)
-         + " |", "|---" * (1 + 4 * len(FORMS)) + "|"]
-    for i, T in enumerate(TORQUES_NM):
+         "| torque N m | " + " | ".join(f"{f} ours | {f} paper dphi | {f} summed | {f} paper 001" for f in forms)
+         + " |", "|---" * (1 + 4 * len(forms)) + "|"]
+    for T in TORQUES_NM:
         L.append(f"| {T:g} | " + " | ".join(
             f"{sig[(T, f)]['ours_theta_last_rev']:.3f} | {sig[(T, f)]['paper_step_last_rev']:.3f} | "
-            f"{sig[(T, f)]['paper_summed_last_rev']:.3f} | {PAPER_001_SIGMA_ARCSEC[i, j]:.3f}"
-            for j, f in enumerate(FORMS)) + " |")
+            f"{sig[(T, f)]['paper_summed_last_rev']:.3f} | {_paper(f, T)}"
+            for f in forms) + " |")
     revs = [v["output_rev_per_s"] for v in sig.values() if np.isfinite(v["output_rev_per_s"])]
     # runs shorter than the steady window: the nominal output speed of the case
     rev = float(np.median(revs)) if revs else case.operation.input_speed_rpm / 60.0 / case.ratio
@@ -230,26 +266,6 @@ def _sigma_csv(tab, forms, torques) -> str:
     return buf.getvalue()
 
 
-def _plot_budget(budget: dict, title: str, path: Path) -> None:
-    """Horizontal bars: % of the output compliance per component at the budget's torque, each
-    labelled with its equivalent stiffness (tangent rigidity / share: that part alone in series)."""
-    from pipeline.render import figure, save_figure
-    rig = budget["tangent_rigidity_Nm_per_arcmin"]
-    items = sorted(budget["compliance_budget"].items(), key=lambda kv: kv[1])
-    fig, ax = figure(figsize=(8, 0.45 * len(items) + 1.5))
-    y = np.arange(len(items))
-    ax.barh(y, [100 * v for _, v in items], color="tab:blue")
-    ax.set_yticks(y, [f"{k}  ({rig / v:,.0f} N m/arcmin)" if v > 0 else f"{k}  (rigid)" for k, v in items])
-    for yi, (_, v) in zip(y, items):
-        ax.text(100 * v, yi, f" {100 * v:.1f} %", va="center", fontsize=8)
-    ax.set_xlabel("share of the output torsional compliance [%]")
-    ax.set_xlim(0, 100 * max(v for _, v in items) * 1.2 + 1e-9)
-    ax.set_title(f"{title}: compliance budget at {budget['torque_Nm']:g} N m "
-                 f"(tangent rigidity {rig:.0f} N m/arcmin)", fontsize=10)
-    ax.grid(True, axis="x", lw=0.3)
-    save_figure(fig, path)
-
-
 def _load_sharing(model, out: Path, points: int = 41) -> None:
     """load_sharing.json/.png: static pin forces at rated torque over one mesh cycle (the eccentric
     turning one pin pitch: input period 360 i / (zp zc) deg), input held at each angle."""
@@ -274,24 +290,45 @@ def _load_sharing(model, out: Path, points: int = 41) -> None:
                  title=f"{model.case.name}: pin load sharing (static, input held, rated torque)")
 
 
+LOOP_OIL_C = 25.0      # the catalog test's oil (room temperature; at rest the film is gone anyway)
+
+
+def _loop_summary(loop) -> dict:
+    return {"oil_temperature_C": LOOP_OIL_C, "width_at_zero_arcmin": loop.width_at_zero_arcmin,
+            "width_frictionless_at_zero_arcmin": loop.width_frictionless_at_zero_arcmin,
+            "max_width_beyond_5pct_rated_arcmin": loop.max_width_arcmin,
+            "torsional_rigidity_Nm_per_arcmin": loop.torsional_rigidity_Nm_per_arcmin,
+            "torsional_rigidity_secant_Nm_per_arcmin": loop.torsional_rigidity_secant_Nm_per_arcmin,
+            "what": "the catalog loop with contact friction at boundary friction (no film at rest) opposing "
+                    "each contact's creep (dynamics.losses.operating.friction_loop); width = falling minus "
+                    "rising branch at zero torque (free play plus friction)"}
+
+
 def cmd_hysteresis(args) -> int:
-    from dynamics.budget import against_reference, compliance_budget
+    from dynamics.budget import against_reference, compliance_budget, rigidity_band
     from dynamics.catalog import hysteresis
-    from pipeline.figures import hysteresis_loop
+    from pipeline.figures import budget_bars, hysteresis_loop
     model, spath = _model(args)
+    from dynamics.losses import Lubricant
+    from dynamics.losses.operating import friction_loop
     res = hysteresis(model)
+    loop = friction_loop(model, Lubricant.from_section(model.case.lubrication), LOOP_OIL_C)
     budget = compliance_budget(model)
+    band = rigidity_band(model, lambda m: hysteresis(m).torsional_rigidity_Nm_per_arcmin)
     ref = against_reference(res.torsional_rigidity_Nm_per_arcmin,
                             model.case.operation.reference_rigidity_Nm_per_arcmin, budget["compliance_budget"])
     out = Path(args.out)
     write_json_atomic(out / "hysteresis.json", {"case": model.case.name, "stiffness": str(spath),
                                                 **res.summary(),
+                                                "loop_width_at_zero_arcmin": loop.width_at_zero_arcmin,
+                                                "friction_loop": _loop_summary(loop),
                                                 "compliance_budget": budget["compliance_budget"],
                                                 "compliance_budget_by_coupling": budget["by_coupling"],
                                                 "compliance_budget_torque_Nm": budget["torque_Nm"],
                                                 "tangent_rigidity_at_rated_Nm_per_arcmin":
                                                     budget["tangent_rigidity_Nm_per_arcmin"],
                                                 "reference": ref,
+                                                "rigidity_band": band,
                                                 "made_from": _made_from(model, "rv-hysteresis/1").to_json()})
     buf = io.StringIO()
     np.savetxt(buf, np.column_stack([res.torque_Nm, res.output_angle_arcmin]), delimiter=",",
@@ -301,11 +338,18 @@ def cmd_hysteresis(args) -> int:
     hysteresis_loop(out / "hysteresis.png", -100 * res.torque_Nm / res.rated_torque_Nm, res.output_angle_arcmin,
                     rigidity_Nm_per_arcmin=res.torsional_rigidity_Nm_per_arcmin,
                     lost_motion_arcmin=res.lost_motion_arcmin, backlash_arcmin=res.backlash_arcmin,
-                    rated_Nm=res.rated_torque_Nm, title=f"{model.case.name}: catalog hysteresis test, input locked")
+                    rated_Nm=res.rated_torque_Nm, title=f"{model.case.name}: catalog hysteresis test, input locked",
+                    secant_Nm_per_arcmin=res.torsional_rigidity_secant_Nm_per_arcmin,
+                    friction=(-100 * loop.torque_Nm / loop.rated_torque_Nm, loop.output_angle_arcmin,
+                              loop.width_at_zero_arcmin))
     _load_sharing(model, out)
-    _plot_budget(budget, model.case.name, out / "compliance_budget.png")
+    budget_bars(out / "compliance_budget.png", budget, model.case.name)
     _say(args, f"hysteresis: {out}/hysteresis.json: rigidity {res.torsional_rigidity_Nm_per_arcmin:.1f} "
-               f"N m/arcmin, lost motion {res.lost_motion_arcmin:.3f} arcmin, backlash {res.backlash_arcmin:.3f} arcmin")
+               f"N m/arcmin (secant {res.torsional_rigidity_secant_Nm_per_arcmin:.1f}), loop width at zero "
+               f"{loop.width_at_zero_arcmin:.3f} arcmin with friction, lost motion {res.lost_motion_arcmin:.3f} arcmin, backlash {res.backlash_arcmin:.3f} arcmin")
+    for name, b in band.items():
+        _say(args, f"rigidity band ({name}: compliance x {b['factors'][0]:.2f} .. x {b['factors'][1]:.2f}): "
+                   f"{b['rigidity_Nm_per_arcmin'][0]:.1f} .. {b['rigidity_Nm_per_arcmin'][1]:.1f} N m/arcmin")
     top = sorted(budget["compliance_budget"].items(), key=lambda kv: -kv[1])
     _say(args, "compliance budget at rated torque: " + ", ".join(
         f"{k} {100 * v:.1f} %" for k, v in top if v >= 0.005) + " (components under 0.5 % omitted)")
@@ -325,9 +369,10 @@ def _common(p) -> None:
 
 
 def register(sub) -> None:
+    from dynamics.loads import FORMS, PAPER_001_FORMS
     p = sub.add_parser("simulate", help="simulate one bench run -> record CSV")
     _common(p)
-    p.add_argument("--load", required=True, help="FORM:TORQUE_NM, FORM in constant, square, sine")
+    p.add_argument("--load", required=True, help=f"FORM:TORQUE_NM, FORM in {', '.join(FORMS)} (dynamics.loads)")
     p.add_argument("--duration", type=float, default=7.0, help="seconds (default 7, paper 001)")
     p.add_argument("--speed-rpm", type=float, default=None,
                    help="input speed [rpm] (default: the case's [operation] input_speed_rpm)")
@@ -338,6 +383,9 @@ def register(sub) -> None:
     p = sub.add_parser("matrix", help="paper 001's 12 load cases -> te_std.csv, comparison.md, plots")
     _common(p)
     p.add_argument("--out", required=True)
+    p.add_argument("--forms", default=",".join(PAPER_001_FORMS),
+                   help=f"comma-separated load forms of {', '.join(FORMS)} (default paper 001's: "
+                        f"{','.join(PAPER_001_FORMS)})")
     p.add_argument("--duration", type=float, default=7.0)
     p.add_argument("--dt", type=float, default=None)
     p.add_argument("--scheduler", default=None, help="Dask scheduler address (default: local processes)")

@@ -32,8 +32,9 @@ def register(sub) -> None:
     p.add_argument("--mesh-size-mm", type=float, default=None,
                    help="element size at the contact [mm] (default: 1/12 of the smallest Hertz half-width)")
     p.add_argument("--mesh", default=None, help="folder of the mesh stage (crankshaft_mesh.npz) to reuse")
-    p.add_argument("--workers", type=int, default=1,
-                   help="local processes for the independent FE problems (tooth map, crankshaft, carrier, ...)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local processes for the independent FE problems (tooth map, crankshaft, carrier, ...); "
+                        "default: the cores")
     p.add_argument("--scheduler", default=None, help="Dask scheduler address (runs the FE problems there)")
     p.add_argument("--radius-mm", type=float)
     p.add_argument("--width-mm", type=float)
@@ -111,18 +112,25 @@ def _case(args, out: Path) -> int:
         from fem.shaft import crankshaft_fingerprint
         crank_mesh = load_mesh3d(Path(args.mesh) / MESH_FILE, case=case,
                                  fingerprint=crankshaft_fingerprint(case))
+    import os
     from functools import partial
     from pipeline.sweep import run_tasks
-    if args.workers < 1:
+    if args.workers is not None and args.workers < 1:
         raise InputError(f"--workers = {args.workers}: must be 1 or more")
+    workers = args.workers or os.cpu_count() or 1
+    if workers > 1 and not args.scheduler:
+        import geometry.solids  # noqa: F401  imported once here, the forked workers inherit it (cadquery: 5-8 s a process)
     runres = build_stiffness(case, mesh_size_m=None if args.mesh_size_mm is None else args.mesh_size_mm * 1e-3,
                              crank_mesh=crank_mesh,
-                             map_tasks=partial(run_tasks, workers=args.workers, scheduler=args.scheduler))
+                             map_tasks=partial(run_tasks, workers=workers, scheduler=args.scheduler))
     # what it was made from: the case and, when reused, the mesh stage's mesh
     prov = made_from(case, stiffness.SCHEMA, mesh=crank_mesh.made_from if crank_mesh is not None else None)
     stiffness.save(dataclasses.replace(runres.model, made_from=prov), out / "stiffness.json")
     _write_meshes(runres, out)
     _pictures(runres, out)
+    if "housing_fe" in runres.artifacts:
+        from pipeline.housing_figure import housing_png
+        housing_png(case, out / "housing.png", runres.artifacts["housing_fe"])
     if not args.quiet:
         print(summary_line(runres.model, time.perf_counter() - t0, out / "stiffness.json"))
     return 0

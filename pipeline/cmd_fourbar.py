@@ -3,9 +3,8 @@
     python -m pipeline fourbar --case CASE.toml --out DIR [--stiffness PATH]
     python -m pipeline tolerance --case CASE.toml --samples N [--model fourbar|full] [--seed S] [--scheduler ADDRESS] --out DIR
 
-Forces come from the project's load-sharing solution (dynamics.model.solve_static) when that module
-is present, else from a statics estimate (dynamics.fourbar.statics_pair_loads); every artifact says
-which. Compliance comes from stiffness.json (default build/<case>/fem/stiffness.json). `--model full`
+Forces come from the lumped model's static load sharing (dynamics.fourbar.model_pair_loads); every
+artifact says so. Compliance comes from stiffness.json (default build/<case>/fem/stiffness.json). `--model full`
 runs dynamics.tolerance.full_monte_carlo (the lumped model; artifacts: pipeline.tolerance_full).
 """
 from __future__ import annotations
@@ -53,43 +52,6 @@ def _check_range(name: str, value: float, lo: float, hi: float) -> float:
     return value
 
 
-def pair_loads(case: ReducerCase, geom: fb.PairGeometry, stiffness, beta1_rad: float,
-               torque_Nm: float) -> fb.PairLoads:
-    """Turning-arm forces from the load-sharing solution, else the labelled statics estimate."""
-    try:
-        from dynamics import model as dm
-    except ModuleNotFoundError as exc:
-        if exc.name != "dynamics.model":
-            raise
-        return fb.statics_pair_loads(case, geom, beta1_rad, torque_Nm)
-    return loads_from_dynamics(dm, case, geom, stiffness, beta1_rad, torque_Nm)
-
-
-def loads_from_dynamics(dm, case: ReducerCase, geom: fb.PairGeometry, stiffness, beta1_rad: float,
-                        torque_Nm: float) -> fb.PairLoads:
-    """Solve the static load sharing at the input angle that puts crank pair (0, 1) at beta1."""
-    model = dm.build_model(case, stiffness)
-    s0 = dm.solve_static(model, 0.0, torque_Nm)
-    carrier0 = math.radians(s0.output_angle_deg)
-    psi0 = float(s0.crank_angle_rad[0]) - carrier0            # eccentric angle on the carrier
-    # the eccentric turns against the carrier (zc/zp - ...): measure its rate numerically
-    s1 = dm.solve_static(model, 1.0, torque_Nm)
-    rate = (float(s1.crank_angle_rad[0]) - math.radians(s1.output_angle_deg) - psi0)  # rad per input deg
-    rate = math.atan2(math.sin(rate), math.cos(rate))
-    target = beta1_rad + geom.ground_angle_rad
-    dpsi = math.atan2(math.sin(target - psi0), math.cos(target - psi0))
-    st = dm.solve_static(model, dpsi / rate, torque_Nm)
-    carrier = math.radians(st.output_angle_deg)
-    c, s = math.cos(-carrier), math.sin(-carrier)
-    rot = np.array([[c, -s], [s, c]])
-    f = np.asarray(st.bearing_force_N, float) @ rot.T            # (discs, cranks, 2), carrier frame
-    psi = float(st.crank_angle_rad[0]) - carrier
-    beta1 = math.atan2(math.sin(psi - geom.ground_angle_rad), math.cos(psi - geom.ground_angle_rad))
-    return fb.PairLoads(geom.to_pair_frame(f[0, :2]), geom.to_pair_frame(f[:, :2].sum(0)),
-                        float(torque_Nm), beta1,
-                        f"dynamics.model.solve_static (input {dpsi / rate:.3f} deg)")
-
-
 def _check_load(args, case: ReducerCase) -> tuple[float, float]:
     """(torque [N m], crank angle [rad]) of the elastic error, checked against the case."""
     torque = case.rated_torque_Nm if args.torque_Nm is None else args.torque_Nm
@@ -101,7 +63,7 @@ def _setup(args, case: ReducerCase):
     torque, beta1 = _check_load(args, case)
     stiff = _stiffness(case, args.stiffness)
     geom = fb.PairGeometry.from_case(case)
-    loads = pair_loads(case, geom, stiff, beta1, torque)
+    loads = fb.model_pair_loads(case, geom, stiff, beta1, torque)
     return geom, loads, fb.JointCompliance.from_stiffness(stiff)
 
 
@@ -182,7 +144,8 @@ def run_fourbar(args) -> int:
             for s in fb.MAIN_SOURCES}
     write_text_atomic(out / "comparison.md",
                       comparison_md(case, geom, loads, base, dev, singles, pairs, paper72, scan, args))
-    _figures(out, dev, singles, pairs, scan)
+    from pipeline.figures import fourbar_sweeps
+    fourbar_sweeps(out, dev, singles, pairs, scan, LABELS)
     write_json_atomic(out / "fourbar.json", {
         "made_from": _made_from(case, args, "rv-fourbar/1"),
         "case": case.name, "torque_Nm": loads.torque_Nm, "crank_angle_deg": math.degrees(loads.beta1_rad),
@@ -322,39 +285,6 @@ Why we disagree with the paper where we do:
   accuracy, and it is where the FE compliance and our load sharing enter.
 """)
     return "\n".join(L) + "\n"
-
-
-def _figures(out: Path, dev, singles, pairs, scan) -> None:
-    from pipeline.render import figure, save_figure
-    A = fb.ARCSEC_PER_RAD
-    fig, ax = figure(1, 2, figsize=(11, 4))
-    for s, sw in singles.items():
-        ax[0].plot(dev * 1e3, sw.rigid_rad * A, label=LABELS[s])
-        ax[1].plot(dev * 1e3, sw.elastic_rad * A, label=LABELS[s])
-    for a, t in zip(ax, ("rigid", "elastic")):
-        a.set_xlabel("deviation [um]"); a.set_ylabel("output-angle error [arcsec]"); a.set_title(t)
-        a.axhline(60, ls=":", c="gray"); a.axhline(-60, ls=":", c="gray"); a.grid(alpha=0.3)
-    ax[0].legend(fontsize=7)
-    save_figure(fig, out / "individual.png")
-    for (a, b), sw in pairs.items():
-        fig = figure(figsize=(11, 4.5))[0]
-        fig.clf()
-        X, Y = np.meshgrid(dev * 1e3, dev * 1e3, indexing="ij")
-        for k, (z, t) in enumerate(((sw.rigid_rad, "rigid"), (sw.elastic_rad, "elastic"))):
-            ax3 = fig.add_subplot(1, 2, k + 1, projection="3d")
-            ax3.plot_surface(X, Y, z * A, cmap="viridis")
-            ax3.set_xlabel(f"{a} [um]", fontsize=8); ax3.set_ylabel(f"{b} [um]", fontsize=8)
-            ax3.set_zlabel("error [arcsec]", fontsize=8); ax3.set_title(t)
-        save_figure(fig, out / f"surface_{a}_{b}.png")
-    fig, ax = figure(figsize=(7, 4))
-    for s, v in scan.items():
-        ax.plot(v["beta1_deg"], v["exact_rad"] * A, label=f"{s} exact")
-        ax.plot(v["beta1_deg"], v["quadratic_rad"] * A, "--", label=f"{s} quadratic")
-    ax.set_yscale("symlog", linthresh=1.0)
-    ax.set_xlabel("crank angle beta1 [deg]"); ax.set_ylabel("rigid output-angle error [arcsec]")
-    ax.set_title("exact closure vs paper's quadratic (+max deviation, no load)"); ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
-    save_figure(fig, out / "crank_angle_scan.png")
 
 
 # ---------------------------------------------------------------- tolerance

@@ -164,6 +164,11 @@ def cmd_signatures(args) -> int:
     progress = None if args.quiet else (lambda i, n, sid: print(f"signatures: {i}/{n} {sid}", flush=True))
     sigs, grid = atlas(case, stiffness, source_list=src, progress=progress)
     data = atlas_json(case, sigs, grid, made_from(case, SCHEMA, stiffness=stiffness.made_from).to_json())
+    from dynamics.signatures import housing_structure
+    hs = housing_structure(case, stiffness)     # the housing's own lines (its bolt pattern), not an error
+    data["structure"] = None if hs is None else dict(source_json(case, hs, None, None), grid_points_per_output_rev=int(
+        hs.spectrum.shape[-1] * 2 - 2), definition="the ideal build's TE with the elastic housing minus the same "
+                                                   "build with the housing held rigid (arcsec, as built)")
     write_json_atomic(out / "signatures.json", data)
     plot(out / "signatures.png", case, sigs)
     if not args.quiet:

@@ -50,6 +50,7 @@ STAGES = {
     "diagnosis": "pipeline.cmd_diagnose:run",
     "paper001": "pipeline.cmd_diagnose:run_paper001",
     "compensate": "pipeline.cmd_compensate:run",
+    "conditions": "pipeline.cmd_conditions:run",
     "report": "pipeline.cmd_report:run",
     "sensitivity": "pipeline.cmd_sensitivity:run",
 }

@@ -1,6 +1,6 @@
 """The engineer's pictures: pure functions of arrays -> one PNG each (matplotlib, off screen).
 
-The stages (cmd_dynamics) and the report (pipeline.report) draw through these, and the image tests
+The stages (cmd_dynamics, cmd_fourbar) and the report (pipeline.report) draw through these, and the image tests
 (tests/test_report.py) draw them from fixed arrays and compare with tests/reference_images/.
 Conventions: catalog axes (torque in % of rated, angle in arcmin), one colour per torque level and
 one panel per load form, characteristic orders labelled in staggered rows so labels never overlap.
@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from dynamics.results import ARCSEC_PER_RAD
 from pipeline.render import figure, save_figure
 
 TORQUE_COLOURS = ("#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02")
@@ -38,12 +39,16 @@ def _polyline(x, y, segments):
 
 
 def hysteresis_loop(path, torque_pct: np.ndarray, angle_arcmin: np.ndarray, *, rigidity_Nm_per_arcmin: float,
-                    lost_motion_arcmin: float, backlash_arcmin: float, rated_Nm: float, title: str) -> None:
+                    lost_motion_arcmin: float, backlash_arcmin: float, rated_Nm: float, title: str,
+                    secant_Nm_per_arcmin: float | None = None, friction: tuple | None = None) -> None:
     """The catalog curve: torsion angle against torque in % of rated, input locked, the sweep
     0 -> +100 -> -100 -> +100 % drawn as rising-torque and falling-torque branches; lost motion
-    (angle between +-3 %) and torsional rigidity b/a (50..100 %) dimensioned; a zoom on +-10 %."""
+    (angle between +-3 %) and torsional rigidity b/a (50..100 %) dimensioned; a zoom on +-10 %.
+    friction = (torque_pct, angle_arcmin, width_at_zero_arcmin): the loop with contact friction
+    (dynamics.losses.operating.friction_loop) drawn over it, its width at zero torque marked."""
     x, y = np.asarray(torque_pct, float), np.asarray(angle_arcmin, float)
-    y = y - 0.5 * (_at(x, y, 3.0) + _at(x, y, -3.0))     # catalog origin: centre of the lost motion
+    y0 = 0.5 * (_at(x, y, 3.0) + _at(x, y, -3.0))         # catalog origin: centre of the lost motion
+    y = y - y0
     fig, (ax, zoom) = figure(1, 2, figsize=(12, 5.2), gridspec_kw={"width_ratios": [3, 2]})
     rising = np.diff(x) > 0
     for a in (ax, zoom):
@@ -65,6 +70,18 @@ def hysteresis_loop(path, torque_pct: np.ndarray, angle_arcmin: np.ndarray, *, r
         ax.annotate(f"b/a = {rigidity_Nm_per_arcmin:.0f} N m/arcmin" if s > 0 else "b/a",
                     (xb, 0.5 * (ya + yb)), xytext=(-8 if s > 0 else 8, 0), textcoords="offset points",
                     ha="right" if s > 0 else "left", va="center", fontsize=9)
+    if secant_Nm_per_arcmin is not None:
+        ax.plot([], [], " ", label=f"secant (midpoint to +-rated): {secant_Nm_per_arcmin:.0f} N m/arcmin")
+    if friction is not None:
+        fx, fy, fw = np.asarray(friction[0], float), np.asarray(friction[1], float) - y0, friction[2]
+        for a in (ax, zoom):
+            a.plot(fx, fy, color="k", lw=0.8, marker=".", ms=3)
+        ax.plot([], [], color="k", lw=0.8, marker=".", ms=3, label="with contact friction (boundary)")
+        hi_f = fy[np.flatnonzero((np.diff(fx, prepend=fx[0]) < 0) & (fx > 0))[-1]]
+        lo_f = fy[np.flatnonzero((np.diff(fx, prepend=fx[0]) > 0) & (fx < 0))[-1]]
+        zoom.annotate("", xy=(-1.0, hi_f), xytext=(-1.0, lo_f), arrowprops=dict(arrowstyle="<->", lw=1.0, color="k"))
+        zoom.text(-1.5, 0.5 * (lo_f + hi_f), f"width at zero\nwith friction\n{fw:.3f} arcmin", ha="right",
+                  va="center", fontsize=8)
     ax.set_ylabel("torsion angle of the output, input locked [arcmin]\n(+ torque and + angle: forward)")
     ax.set_title(title, fontsize=10)
     ax.legend(loc="upper left", fontsize=8)
@@ -220,4 +237,121 @@ def load_sharing(path, pin_angle_deg: np.ndarray, pin_force_N: np.ndarray, cycle
     cyc.grid(True, lw=0.3)
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
+    save_figure(fig, path)
+
+
+def budget_bars(path, budget: dict, title: str) -> None:
+    """Horizontal bars: % of the output compliance per component at the budget's torque, each
+    labelled with its equivalent stiffness (tangent rigidity / share: that part alone in series)."""
+    rig = budget["tangent_rigidity_Nm_per_arcmin"]
+    items = sorted(budget["compliance_budget"].items(), key=lambda kv: kv[1])
+    fig, ax = figure(figsize=(8, 0.45 * len(items) + 1.5))
+    y = np.arange(len(items))
+    ax.barh(y, [100 * v for _, v in items], color="tab:blue")
+    ax.set_yticks(y, [f"{k}  ({rig / v:,.0f} N m/arcmin)" if v > 0 else f"{k}  (rigid)" for k, v in items])
+    for yi, (_, v) in zip(y, items):
+        ax.text(100 * v, yi, f" {100 * v:.1f} %", va="center", fontsize=8)
+    ax.set_xlabel("share of the output torsional compliance [%]")
+    ax.set_xlim(0, 100 * max(v for _, v in items) * 1.2 + 1e-9)
+    ax.set_title(f"{title}: compliance budget at {budget['torque_Nm']:g} N m "
+                 f"(tangent rigidity {rig:.0f} N m/arcmin)", fontsize=10)
+    ax.grid(True, axis="x", lw=0.3)
+    save_figure(fig, path)
+
+
+def fourbar_sweeps(out, dev, singles, pairs, scan, labels: dict[str, str]) -> None:
+    """fourbar/: individual.png (each source swept alone, rigid and elastic), surface_<a>_<b>.png (pairs)
+    and crank_angle_scan.png (exact closure beside paper 000's quadratic); deviations in mm, errors in rad."""
+    A = ARCSEC_PER_RAD
+    fig, ax = figure(1, 2, figsize=(11, 4))
+    for s, sw in singles.items():
+        ax[0].plot(dev * 1e3, sw.rigid_rad * A, label=labels[s])
+        ax[1].plot(dev * 1e3, sw.elastic_rad * A, label=labels[s])
+    for a, t in zip(ax, ("rigid", "elastic")):
+        a.set_xlabel("deviation [um]"); a.set_ylabel("output-angle error [arcsec]"); a.set_title(t)
+        a.axhline(60, ls=":", c="gray"); a.axhline(-60, ls=":", c="gray"); a.grid(alpha=0.3)
+    ax[0].legend(fontsize=7)
+    save_figure(fig, out / "individual.png")
+    for (a, b), sw in pairs.items():
+        fig = figure(figsize=(11, 4.5))[0]
+        fig.clf()
+        X, Y = np.meshgrid(dev * 1e3, dev * 1e3, indexing="ij")
+        for k, (z, t) in enumerate(((sw.rigid_rad, "rigid"), (sw.elastic_rad, "elastic"))):
+            ax3 = fig.add_subplot(1, 2, k + 1, projection="3d")
+            ax3.plot_surface(X, Y, z * A, cmap="viridis")
+            ax3.set_xlabel(f"{a} [um]", fontsize=8); ax3.set_ylabel(f"{b} [um]", fontsize=8)
+            ax3.set_zlabel("error [arcsec]", fontsize=8); ax3.set_title(t)
+        save_figure(fig, out / f"surface_{a}_{b}.png")
+    fig, ax = figure(figsize=(7, 4))
+    for s, v in scan.items():
+        ax.plot(v["beta1_deg"], v["exact_rad"] * A, label=f"{s} exact")
+        ax.plot(v["beta1_deg"], v["quadratic_rad"] * A, "--", label=f"{s} quadratic")
+    ax.set_yscale("symlog", linthresh=1.0)
+    ax.set_xlabel("crank angle beta1 [deg]"); ax.set_ylabel("rigid output-angle error [arcsec]")
+    ax.set_title("exact closure vs paper's quadratic (+max deviation, no load)"); ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    save_figure(fig, out / "crank_angle_scan.png")
+
+
+def housing_section(path, points_m: np.ndarray, triangles: np.ndarray, displacement_m: np.ndarray,
+                    von_mises_Pa: np.ndarray, pin_xy_m: np.ndarray, pin_force_N: np.ndarray, bolt_xy_m: np.ndarray,
+                    bolt_radius_m: float, radial_stiffness_N_per_m: np.ndarray, lobes: dict, *, title: str,
+                    datum_stiffness_N_per_m: np.ndarray | None = None) -> None:
+    """The housing section (fem.housing): von Mises on the deformed mesh under one disc's pin forces
+    (displacements magnified), a zoom on the most loaded grooves with the mesh, and the per-pin
+    radial stiffness around the ring with its Fourier lobes (and, when given, that of the datum
+    one pin pitch behind each groove: the housing beyond the groove law)."""
+    import matplotlib.tri as mtri
+    from matplotlib.patches import Circle
+    p, u = points_m * 1e3, displacement_m * 1e3
+    umax = float(np.abs(u).max()) or 1.0
+    scale = 0.04 * float(np.ptp(p[:, 0])) / umax
+    fig, axes = figure(1, 3, figsize=(18, 6.2), gridspec_kw={"width_ratios": [1.1, 1.0, 1.1]})
+    tri = mtri.Triangulation(*(p + scale * u).T, triangles)
+    fmax = float(np.hypot(*pin_force_N.T).max()) or 1.0
+    k_hot = int(np.argmax(np.hypot(*pin_force_N.T)))
+    for ax, zoom in ((axes[0], False), (axes[1], True)):
+        pc = ax.tripcolor(tri, facecolors=von_mises_Pa / 1e6, cmap="viridis", edgecolors="0.3" if zoom else "none",
+                          linewidth=0.1)
+        for b in bolt_xy_m:
+            ax.add_patch(Circle(b * 1e3, bolt_radius_m * 1e3, color="#c0392b", alpha=0.6))
+        arrow = (0.03 if zoom else 0.08) * float(np.ptp(p[:, 0])) / fmax     # force on the housing, ending at the pin
+        for xy, f in zip(pin_xy_m * 1e3, pin_force_N):
+            if np.hypot(*f) > 0:
+                ax.annotate("", xy=xy, xytext=xy - arrow * f,
+                            arrowprops=dict(arrowstyle="-|>", color="#e67e22", lw=1.2, mutation_scale=10))
+        ax.set_aspect("equal")
+        if zoom:
+            c = pin_xy_m[k_hot] * 1e3
+            span = 4.0 * np.hypot(*(pin_xy_m[1] - pin_xy_m[0])) * 1e3
+            ax.set_xlim(c[0] - span, c[0] + span)
+            ax.set_ylim(c[1] - span, c[1] + span)
+            ax.set_title("most loaded grooves, mesh (P2 triangles)")
+        else:
+            ax.set_title(f"von Mises [MPa], displacement x {scale:.3g}")
+        ax.set_xlabel("x [mm]")
+        ax.set_ylabel("y [mm]")
+        fig.colorbar(pc, ax=ax, shrink=0.8, label="von Mises [MPa]")
+    ax = axes[2]
+    ang = np.degrees(np.arctan2(pin_xy_m[:, 1], pin_xy_m[:, 0])) % 360
+    order = np.argsort(ang)
+    k = radial_stiffness_N_per_m / 1e6
+    ax.plot(ang[order], k[order], "o-", color="#1b9e77", ms=4, label="seat (groove surface)")
+    ax.axhline(float(k.mean()), color="0.5", lw=0.8, ls="--", label=f"seat mean {k.mean():.0f} N/um")
+    if datum_stiffness_N_per_m is not None:
+        kd = datum_stiffness_N_per_m / 1e6
+        ax.plot(ang[order], kd[order], "s-", color="#7570b3", ms=3, lw=0.8,
+                label=f"datum one pin pitch behind (mean {kd.mean():.0f} N/um)")
+    for b in np.degrees(np.arctan2(bolt_xy_m[:, 1], bolt_xy_m[:, 0])) % 360:
+        ax.axvline(b, color="#c0392b", lw=0.6, alpha=0.5)
+    ax.plot([], [], color="#c0392b", lw=0.6, label="bolt angles")
+    big = sorted(((m, v) for m, v in lobes.items() if v > 1e-4), key=lambda kv: -kv[1])[:4]
+    text = ", ".join(f"m={m}: {100 * v:.2f} %" for m, v in big) or "none above 0.01 %"
+    ax.set_title(f"per-pin radial stiffness; seat lobes (of the mean) {text}", fontsize=9)
+    ax.set_xlabel("pin angle [deg]")
+    ax.set_ylabel("radial stiffness [N/um]")
+    ax.grid(True, lw=0.3)
+    ax.set_yscale("log")
+    ax.legend(loc="center right", fontsize=8)
+    fig.suptitle(title)
     save_figure(fig, path)

@@ -84,6 +84,18 @@ SECTIONS = (
             "(83-94 % TE RMS removed online on this bench).", ("compensation.json",),
             missing="not built: `compensate` runs on a diagnosis (`make all` runs both where the case has "
                     "bench records)"),
+    Section("Operating map: friction, lubrication, efficiency, bearing life", "conditions",
+            "Each condition of the bench's table (input speed, torque, oil temperature) through the model with "
+            "friction at every contact (dynamics.losses: mixed-lubrication coefficient from the EHL film and the "
+            "roughness, Palmgren bearing moments, seals): mean TE forward and backward and their gap, efficiency, "
+            "input torque; the efficiency chart; ISO 281 bearing lives at rated torque and speed.",
+            ("conditions.csv",),
+            missing="not built: `conditions` runs where the case has a conditions table (`make all` runs it for "
+                    "the RV-160N on ../shared/measured/conditions_25C.csv)"),
+    Section("Operating map with the diagnosis' extension", "conditions_diagnosed",
+            "The same table through the model extended by the diagnosis' fitted causes (`conditions --diagnosis`).",
+            ("conditions.csv",),
+            missing="not built: needs the diagnosis of bench records and a conditions table"),
     Section("Sensitivity of the rigidity to the case's sizes", "sensitivity",
             "Where the predicted rigidity misses its reference, which size would have to be what: each variant is "
             "the case with one size changed (and the sizes tied to it), run through geometry, mesh, FE and the "
@@ -111,7 +123,15 @@ CAPTIONS = {
                             "grows slightly with load (Hertzian line contact); the bearings beside them."),
     "hysteresis.png": ("Catalog hysteresis loop", "torsion angle against torque in % of rated: the b/a chord gives "
                        "the torsional rigidity, the +-3 % band the lost motion (zoom on the right); the rising and "
-                       "falling branches part only inside the clearance (frictionless contacts)."),
+                       "falling branches part only inside the clearance (frictionless contacts); black: the loop "
+                       "with contact friction at rest (boundary), its width at zero torque marked in the zoom."),
+    "gap_map.png": ("Operating map: gap and peak-to-peak against torque", "left: mean TE forward minus backward, "
+                    "one colour per input speed, lines predicted (dotted frictionless), circles measured: the slope "
+                    "is the wind-up, its offset at zero torque the free play; right: TE peak-to-peak per direction "
+                    "(the bench's is dominated by the once-per-revolution reading error, absent from an ideal model)."),
+    "efficiency.png": ("Efficiency against output speed (the catalog's chart)", "one colour per torque, one line "
+                       "style per oil temperature: efficiency falls with speed (viscous losses grow) and rises with "
+                       "torque and temperature; the star is the published figure at rated torque."),
     "compliance_budget.png": ("Compliance budget at rated torque", "each component's share of the output "
                               "torsional compliance: the longest bar is where stiffness is lost."),
     "load_sharing.png": ("Load sharing per pin and teeth in contact", "left: how many pins of each disc carry "

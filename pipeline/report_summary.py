@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from dynamics.loads import FORMS
-from dynamics.matrix import PAPER_001_SIGMA_ARCSEC, TORQUES_NM
+from dynamics.matrix import paper001_sigma_arcsec
 
 LOST_MOTION_CATALOG_ARCMIN = 1.0     # Nabtesco RV-E / RV-N catalogs: backlash and lost motion <= 1 arcmin
 # Nabtesco RV-E catalog, RV-40E: rated torque 412 N m, torsional rigidity 108 N m/arcmin
@@ -39,13 +39,13 @@ def read_json(path: Path) -> dict | None:
 
 
 def read_sigma(path: Path) -> dict | None:
-    """te_std.csv -> {(torque, form): sigma}."""
+    """te_std.csv -> {(torque, form): sigma}, the load forms (by name) in the file's column order."""
     try:
         with path.open() as fh:
             rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
     except OSError:
         return None
-    return {(float(r["torque_Nm"]), f): float(r[f]) for r in rows for f in FORMS if f in r}
+    return {(float(r["torque_Nm"]), f): float(r[f]) for r in rows for f in r if f in FORMS}
 
 
 def _f(v, fmt=".3g", unit="", missing="not built") -> str:
@@ -96,6 +96,16 @@ def key_figures(case_dir: Path, rated_Nm: float | None, ratio: float | None) -> 
             "stiffer than the reference: a compliance of the real path that the model lacks or underrates reads "
             "as excess stiffness (the compliance budget shows what the model's path holds)"
             if rig and ((cat and rig > 1.2 * cat[1]) or bench) else ""),
+        Row("torsional rigidity, secant (lost-motion midpoint to +-rated)",
+            _f(_get(h, "torsional_rigidity_secant_Nm_per_arcmin"), ".0f", "N m/arcmin"), "-",
+            "hysteresis/hysteresis.json", "the whole wind-up, clearance knee included: below b/a, which is "
+            "the slope of the stiff upper part"),
+        Row("loop width at zero torque with contact friction", _f(_get(h, "loop_width_at_zero_arcmin"), ".3f", "arcmin"),
+            "-", "hysteresis/hysteresis.json", "free play plus what boundary friction holds at rest "
+            "(dynamics.losses: the friction adds "
+            + _f(None if _get(h, "friction_loop") is None else 60 * (h["friction_loop"]["width_at_zero_arcmin"]
+                                                                     - h["friction_loop"]["width_frictionless_at_zero_arcmin"]),
+                 ".2f", "arcsec", "?") + ")"),
         Row("lost motion (angle between +-3 % rated)", _f(_get(h, "lost_motion_arcmin"), ".3f", "arcmin"),
             f"catalog <= {LOST_MOTION_CATALOG_ARCMIN:g} arcmin", "hysteresis/hysteresis.json",
             "lost motion = free play + elastic wind-up between -3 % and +3 % rated, so it exceeds the backlash"),
@@ -108,6 +118,7 @@ def key_figures(case_dir: Path, rated_Nm: float | None, ratio: float | None) -> 
             "the same free play taken up by the lumped model (every body free to settle, +-0.01 % rated) "
             "instead of the rigid disc on its eccentric, so it differs slightly from the rigid figure"),
     ]
+    rows += operating_rows(case_dir)
     if ls:
         lo, hi = ls.get("teeth_in_contact_range", [None, None])
         rows.append(Row("teeth in contact per disc at rated torque (over a mesh cycle)", f"{lo}-{hi}",
@@ -115,12 +126,13 @@ def key_figures(case_dir: Path, rated_Nm: float | None, ratio: float | None) -> 
                         f"largest pin carries {100 * ls.get('max_pin_share_of_disc_load', 0):.1f} % of its disc's load"))
     if sig:
         top = max(T for T, _ in sig)
-        vals = " / ".join(f"{sig.get((top, f), float('nan')):.3g}" for f in FORMS)
+        forms = list(dict.fromkeys(f for _, f in sig))
+        vals = " / ".join(f"{sig.get((top, f), float('nan')):.3g}" for f in forms)
         ref = "-"
-        if ratio == PAPER_001_RATIO and cat and top in TORQUES_NM:
-            i = TORQUES_NM.index(top)
-            ref = "paper 001: " + " / ".join(f"{PAPER_001_SIGMA_ARCSEC[i, j]:.2f}" for j in range(len(FORMS)))
-        rows.append(Row(f"sigma of TE at {top:g} N m, {' / '.join(FORMS)} (t >= 2 s)", vals + " arcsec", ref,
+        paper = [paper001_sigma_arcsec(f, top) for f in forms]
+        if ratio == PAPER_001_RATIO and cat and any(v is not None for v in paper):
+            ref = "paper 001: " + " / ".join("no paper figure" if v is None else f"{v:.2f}" for v in paper)
+        rows.append(Row(f"sigma of TE at {top:g} N m, {' / '.join(forms)} (t >= 2 s)", vals + " arcsec", ref,
                         "matrix/te_std.csv",
                         "ours is the elastic TE alone; paper 001's level must hold a no-load kinematic error of "
                         "a geometry it does not publish: compare trends" if ref != "-" else ""))
@@ -206,3 +218,33 @@ def _paper001_text(p: dict) -> str:
         return "built (see the diagnosis section)"
     return (f"simulated no-load peak-to-peak {sim:.3g} arcsec; an output coaxiality of {um:.3g} um at "
             f"r = {p.get('output_flange_radius_mm', float('nan')):g} mm closes the gap")
+
+
+def operating_rows(case_dir: Path) -> list[Row]:
+    """Efficiency, bearing life and the operating map's gap error (the `conditions` stage)."""
+    c = read_json(case_dir / "conditions" / "conditions.json")
+    if not c:
+        return [Row("operating map (efficiency, bearing life, gap over speed and torque)", "not built", "-",
+                    "conditions/conditions.json", "built where the case has a conditions table (RV-160N bench)")]
+    rp, life, pub = c["rated_point"], c["bearing_life"], c["rated_point"]["published"]
+    rows = [Row(f"efficiency at rated torque, {c['bearing_life']['output_speed_rpm']:g} rpm output, 40 C oil",
+                _f(rp["efficiency"], ".1%"), f"{pub['value']:.0%} ({pub['band'][0]:.0%}-{pub['band'][1]:.0%}): "
+                f"{pub['source']}", "conditions/conditions.json",
+                f"pin friction {rp['pin_friction_mean']:.3f} at film parameter {rp['pin_film_parameter_mean']:.2f}"),
+            Row("bearing life L10 at rated torque and speed (weakest; system)",
+                f"{life['weakest_L10_h']:.0f} h ({life['weakest']}); system {life['system_L10_h']:.0f} h "
+                f"(x {life['system_L10_over_catalog']:.2f}); modified Lnm {life['system_Lnm_h']:.0f} h",
+                f"catalog rated life K = {life['catalog_rated_life_h']:g} h", "conditions/conditions.json",
+                "ISO 281 from the model's load distribution; the system life of all crank bearings"),
+            Row("starting torque at the input (no load, 25 C)", _f(c["starting_torque_input_Nm"]["25"], ".2f", "N m"),
+                "-", "conditions/conditions.json", "boundary friction, bearing preload moments, seals")]
+    m = c.get("against_measured")
+    if m:
+        sl = m["gap_slope_by_speed_rpm"]
+        txt = "; ".join(f"{k} rpm {v['predicted_arcsec_per_Nm']:.3f} (bench {v['measured_arcsec_per_Nm']:.3f})"
+                        for k, v in sl.items() if v["rows"] >= 5)
+        rows.append(Row("forward-backward gap over the bench's conditions: RMS error",
+                        f"{m['gap_rms_error_arcsec']:.1f} arcsec (frictionless {m['gap_rms_error_frictionless_arcsec']:.1f})",
+                        f"{m['rows']} bench conditions (conditions_25C.csv)", "conditions/conditions.json",
+                        f"gap per N m by input speed: {txt} arcsec/(N m)"))
+    return rows

@@ -25,6 +25,14 @@ so that dynamics tests run fast and before/without the FE stage, with every figu
   involute mesh  ISO 6336-1 single-pair stiffness c' = 14 N/(mm um) per face width; mean mesh
                  stiffness c' eps b, peak-to-peak variation 1 / eps (one vs two pairs); eps from
                  the standard-gear contact-ratio formula.
+  main bearings  the case's preloaded ball pair by its linearised closed form (fem.main_bearings.
+                 preloaded_closed_form, Jones/Harris at no external load).
+  joints         the support bearings' seat layers and cup bending at the rated load (fem.components.
+                 joints.seat_compliance_m_per_N: closed forms); the carrier's joint layers left out
+                 (they need the carrier FE): carrier_delta zero.
+  housing        one mode: the pin ring turning as the inner edge of an annulus clamped at the bolt
+                 circle, theta / T = (1/a^2 - 1/b^2) / (4 pi G t) (fem.housing_checks.annulus_torsion_rad_per_Nm),
+                 modal mass from the ring's polar inertia; no residual.
 """
 from __future__ import annotations
 
@@ -108,6 +116,25 @@ def _pin_series(case: ReducerCase, loads: np.ndarray) -> PinSeries:
     return PinSeries(0.0, loads.copy(), d)
 
 
+def _parts(case: ReducerCase) -> dict:
+    from fem import main_bearings as mb
+    from fem.components import joints, main_bearings
+    k_rad, k_tilt = mb.preloaded_closed_form(mb.case_pair(case))
+    nc = case.carrier.crank_count
+    from fem.components import housing
+    from fem.housing_checks import annulus_torsion_rad_per_Nm
+    h, c, mat = case.housing, case.cycloid, case.material
+    a, b, t = c.pin_circle_radius_mm * 1e-3, h.bolt_circle_radius_mm * 1e-3, h.pin_ring_length_mm * 1e-3
+    k_theta = 1.0 / annulus_torsion_rad_per_Nm(a, b, mat.youngs_modulus_GPa * 1e9, mat.poisson_ratio, t)
+    th = 2 * np.pi * np.arange(c.zp) / c.zp
+    phi = np.column_stack([-np.sin(th), np.cos(th)]).reshape(-1, 1) / math.sqrt(c.zp)   # unit-norm turn of every pin
+    J = mat.density_kg_per_m3 * t * math.pi * (h.pin_ring_outer_radius_mm ** 4 - a ** 4 * 1e12) * 1e-12 / 2
+    ring = housing.Entry(phi, np.array([k_theta / (c.zp * a * a)]), np.array([J / (c.zp * a * a)]), 0.0)
+    return {"housing": ring, "main_bearings": main_bearings.Entry(k_rad, k_tilt, main_bearings.plane_z_m(case)),
+            "joints": joints.Entry(np.zeros((4 * nc, 4 * nc)), joints.seat_compliance_m_per_N(case)["total_m_per_N"],
+                                   (0.75, 1.5))}
+
+
 def stiffness_for_tests(case: ReducerCase) -> StiffnessModel:
     from fem.crank_tilt import beam_flexibility, two_eccentric_blocks
     E = case.material.youngs_modulus_GPa * 1e9
@@ -154,6 +181,7 @@ def stiffness_for_tests(case: ReducerCase) -> StiffnessModel:
         crank_bending=CrankBending(Cb, Jf),
         carrier=_carrier(case),
         pin_series=_pin_series(case, pin_loads),
+        parts=_parts(case),
         sources={"all": "tests/support.py closed-form TEST STAND-IN (Hertz/Johnson, Palmgren, Stribeck, "
                         "stepped beam, portal frame, ISO 6336-1; disc body rigid), not FE"},
         made_from=made_from(case, SCHEMA))   # fingerprinted like the fem stage's file

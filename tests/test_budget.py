@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from dynamics.budget import (SPLITS, compliance_budget, coupling_tangents, energy_shares, mesh_split,
+from dynamics.budget import (compliance_budget, split_for, coupling_tangents, energy_shares, mesh_split,
                              support_split, tangent_state)
 from dynamics.reducer import build_model
 from dynamics.statics import solve_static
@@ -60,7 +60,7 @@ def test_each_coupling_split_spreads_exactly_that_couplings_tangent_energy(model
     energies add up to dq^T K_i dq: no crank, contact or part is lost or counted twice."""
     q, th, Ks, dq = tangent_state(model, model.case.rated_torque_Nm)
     for name, K in Ks.items():
-        parts = SPLITS[name](model, q, th, dq, K)
+        parts = split_for(name)(model, q, th, dq, K)
         assert sum(parts.values()) == pytest.approx(float(dq @ K @ dq), rel=1e-6), name
 
 

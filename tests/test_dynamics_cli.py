@@ -5,9 +5,11 @@ import json
 import numpy as np
 import pytest
 
+from dynamics.loads import LoadSpec, load_torque_Nm
 from fem.stiffness import COMPONENTS, save
 from geometry.params import load_case
 from pipeline.cli import main
+from pipeline.report_summary import key_figures
 from support import case_path, stiffness_for_tests
 
 
@@ -144,3 +146,42 @@ def test_a_torque_beyond_the_momentary_rating_is_a_one_line_error(tmp_path, stif
     assert rc == 2 and not out.exists()
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "momentary" in err and "2058" in err
+
+
+# ------------------------------------------------------------------ a load form beyond paper 001
+
+def test_simulate_runs_the_trapezoid(tmp_path, stiffness_file):
+    out = tmp_path / "rec.csv"
+    assert main(["simulate", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--load", "trapezoid:300",
+                 "--duration", "1.3", "--dt", "2e-4", "--out", str(out), "--quiet"]) == 0
+    text = out.read_text()
+    assert "load trapezoid:300" in text
+    data = np.loadtxt([r for r in text.splitlines() if not r.startswith("#")][1:], delimiter=",")
+    assert np.allclose(data[:, 3], load_torque_Nm(LoadSpec("trapezoid", 300.0), data[:, 0]), atol=1e-6)
+    assert data[-1, 3] == pytest.approx(300.0)          # t = 1.3 s: on the dwell at T
+
+
+def test_the_matrix_runs_a_form_when_asked_and_says_it_has_no_paper_figure(tmp_path, stiffness_file):
+    assert main(["matrix", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--out", str(tmp_path),
+                 "--duration", "0.1", "--dt", "2e-4", "--forms", "sine,trapezoid", "--quiet"]) == 0
+    rows = list(csv.reader((tmp_path / "te_std.csv").open()))
+    assert rows[0] == ["torque_Nm", "sine", "trapezoid"]
+    assert sorted(p.name for p in tmp_path.glob("*.npz")) == sorted(
+        f"{f}_{T}.npz" for f in ("sine", "trapezoid") for T in (100, 200, 300, 400))
+    text = (tmp_path / "comparison.md").read_text()
+    assert "| 400 | " in text and "19.485" in text and "no paper figure" in text
+    # the report's key figures read the forms by name from the table's header
+    (tmp_path / "case" / "matrix").mkdir(parents=True)
+    (tmp_path / "case" / "matrix" / "te_std.csv").write_text(
+        "torque_Nm,constant,square,sine,trapezoid\n400,1.0,2.0,3.0,4.0\n")
+    row = next(r for r in key_figures(tmp_path / "case", 412.0, 81) if r.quantity.startswith("sigma of TE"))
+    assert "constant / square / sine / trapezoid" in row.quantity and row.value == "1 / 2 / 3 / 4 arcsec"
+    assert row.reference == "paper 001: 19.20 / 19.03 / 19.48 / no paper figure"   # 19.485 to 2 places
+
+
+@pytest.mark.parametrize("forms", ["ramp", "sine,,square", "sine,sine"])
+def test_a_bad_forms_option_is_one_error_line(tmp_path, stiffness_file, forms, capsys):
+    assert main(["matrix", "--case", str(case_path()), "--stiffness", str(stiffness_file), "--out", str(tmp_path),
+                 "--forms", forms]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("error:") and "constant, square, sine, trapezoid" in err

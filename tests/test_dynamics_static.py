@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from dynamics import model as dm
-from dynamics.model import quasi_static, solve_static
+from dynamics.statics import ZERO_LOAD_FRACTION, quasi_static, solve_static
 from support import case_path, model_for_tests
 
 CASES = ("rv40e-81", "rv40e-105", "rv160n-81")
@@ -26,7 +26,7 @@ def _residual_N(model, s):
     w, _ = dm.evaluate(model, s.q, math.radians(s.input_angle_deg))
     r = w.f.copy()
     r[model.i_out] -= s.torque_Nm if abs(s.torque_Nm) > 1e-3 else \
-        math.copysign(dm.ZERO_LOAD_FRACTION, s.torque_Nm) * model.case.rated_torque_Nm
+        math.copysign(ZERO_LOAD_FRACTION, s.torque_Nm) * model.case.rated_torque_Nm
     return np.abs(r / model.scale).max()
 
 

@@ -9,8 +9,8 @@ import pytest
 from dynamics import model as dm
 from dynamics.couplings.base import foot_point
 from dynamics.loads import LoadSpec
-from dynamics.model import (DynamicsError, build_model, linearise, nominal_q, quasi_static, simulate,
-                            solve_static)
+from dynamics.model import DynamicsError, build_model, simulate
+from dynamics.statics import linearise, nominal_q, quasi_static, solve_static
 from support import model_for_tests, stiffness_for_tests
 
 

@@ -7,7 +7,8 @@ import tomllib
 import numpy as np
 import pytest
 
-from dynamics.model import evaluate, nominal_q, solve_static
+from dynamics.model import evaluate
+from dynamics.statics import nominal_q, solve_static
 from geometry.params import CaseError, Errors, case_from_dict, load_case
 from support import case_path, model_for_tests
 

@@ -216,3 +216,39 @@ def test_the_default_estimate_converges_linearly_in_h_to_within_its_stated_error
     # the default estimate (levels 1.6, 1.0) against the (1.33, 1.0) one: measured 0.7 % apart
     default = c[2] + (c[2] - c[0]) * 1.0 / (1.6 - 1.0)
     assert default == pytest.approx(s["extrapolated_compliance_rad_per_Nm"], rel=0.03)
+
+
+# ----------------------------------------------------------------------------- joint layers
+def test_the_joint_layers_are_one_element_layer_at_each_joint(geom):
+    """The pillar joint's layer: pillar tets on the end plate (z from 0), the face joint's: flange tets
+    under the mounting face; each a positive thickness, the pillar layer covering every pillar."""
+    from fem.joint_layers import joint_layer_tets
+    m3, region = fc.extruded_mesh(geom, 1.6 * geom.pillar_radius_mm * 1e-3)
+    lay = joint_layer_tets(m3, region == fc.PILLAR, region == fc.FLANGE, geom.mounting_face_z_mm * 1e-3)
+    for name, (idx, h) in lay.items():
+        assert len(idx) > 0 and np.all(h > 0), name
+    z = m3.points[m3.tetrahedra[lay["pillar"][0]], 2]
+    assert np.isclose(z.min(), 0.0) and z.max() <= lay["pillar"][1].max() + 1e-12
+    xy = m3.points[m3.tetrahedra[lay["pillar"][0]], :2].mean(axis=1)
+    assert len({int(np.argmin([np.hypot(*(p - np.array(geom.pillar_xy_mm(j)) * 1e-3))
+                               for j in range(geom.pillar_count)])) for p in xy}) == geom.pillar_count
+
+
+@pytest.mark.slow
+def test_a_stiff_joint_layer_gives_the_bonded_carrier_and_a_real_one_is_softer(geom, coarse):
+    """Layers of 1e6 x the steel slab's stiffness per area reproduce the bonded carrier (to 1e-4); the
+    case's mid-band law (fem.components.joints) is softer, its seat flexibility still SPD and its
+    difference to the bonded one positive semidefinite (Rayleigh: a softer part cannot stiffen it)."""
+    from fem.components.joints import carrier_layers
+    from fem.joint_layers import JointLayers
+    h = 1.6 * geom.pillar_radius_mm * 1e-3
+    huge = 1e6 * 206e9 / 1e-3
+    stiff = fc.carrier_compliance(geom, E, NU, edge_length_m=h, joints=JointLayers(huge, huge, huge, huge))
+    assert np.allclose(stiff.compliance_m_per_N, coarse.compliance_m_per_N, rtol=1e-4,
+                       atol=1e-4 * np.abs(coarse.compliance_m_per_N).max())
+    layers, _ = carrier_layers(load_case(CASES / "rv40e-81.toml"))
+    soft = fc.carrier_compliance(geom, E, NU, edge_length_m=h, joints=layers)
+    assert soft.torsional_stiffness_Nm_per_arcmin(0.5) < 0.95 * coarse.torsional_stiffness_Nm_per_arcmin(0.5)
+    d = soft.compliance_m_per_N - coarse.compliance_m_per_N
+    assert np.linalg.eigvalsh(0.5 * (d + d.T)).min() > -1e-6 * np.abs(d).max()
+    assert np.linalg.eigvalsh(soft.compliance_m_per_N).min() > 0

@@ -1,4 +1,4 @@
-"""The FEM stage's reduction to rv-stiffness/3: load ranges that hold the lumped model's forces up
+"""The FEM stage's reduction to rv-stiffness/4: load ranges that hold the lumped model's forces up
 to the catalog momentary torque, the support bearing entry, the crank bending blocks, and the
 closed-form test stand-in (tests/support.py) that the dynamics tests run on."""
 import math

@@ -59,3 +59,41 @@ def test_stepped_crankshaft_lies_between_the_journal_beam_and_the_stepped_beam(c
     # the two-eccentric FE (reactions spread over the seats, fem.crank_tilt) against its own stepped
     # beam: the same over-stiffening, FE / beam C11 = 1 / 0.82 = 1.21 measured (tests/test_fem_crank_tilt)
     assert 1.05 < m.checks["crank_bending"]["fe_over_beam_C11"] < 1.4
+
+
+def test_the_pinned_and_held_solvers_match_the_sparse_lu_of_the_same_systems():
+    """fem.shaft.pinned_solve (the saddle-point system through one SPD solve, 3-2-1 held) and
+    held_solve (two-level PCG) against elastic.Factorized (SuperLU of the saddle-point system and of
+    the held stiffness): the same linear systems, so equal to round-off (PCG_RTOL 1e-12)."""
+    import cadquery as cq
+    import scipy.sparse as sp
+    from fem import elastic
+    from fem.mesh import tet_mesh_from_solid
+    from fem.shaft import held_solve, p2_stiffness, pinned_solve
+    m3 = tet_mesh_from_solid(cq.Workplane("XY").circle(5.0).extrude(40.0), 4e-3)
+    E, nu = 206e9, 0.3
+    basis, K = p2_stiffness(m3, E, nu)
+    K_skfem = elastic.stiffness(elastic.basis_3d(m3, order=2), E, nu)
+    assert abs(K - K_skfem).max() < 1e-12 * abs(K_skfem).max()        # einsum assembly = skfem's form
+    x = basis.doflocs
+    comp = np.empty(basis.N, int)
+    for arr in (basis.nodal_dofs, basis.edge_dofs):
+        for i in range(3):
+            comp[arr[i]] = i
+    # pins: mean x, y of two end bands, mean z and mean twist of the first (the six rigid motions)
+    bands = [np.abs(x[2]) < 4e-3, np.abs(x[2] - 40e-3) < 4e-3]
+    rows = [(bands[k] & (comp == c)) / np.sum(bands[k] & (comp == c)) for k in (0, 1) for c in (0, 1)]
+    rows.append((bands[0] & (comp == 2)) / np.sum(bands[0] & (comp == 2)))
+    rows.append(np.where(bands[0] & (comp == 0), -x[1], 0.0) + np.where(bands[0] & (comp == 1), x[0], 0.0))
+    Cm = sp.csr_matrix(np.vstack(rows))
+    F = np.zeros((basis.N, 2))
+    F[(comp == 0) & (np.abs(x[2] - 20e-3) < 3e-3), 0] = 1.0                       # a lateral load mid-span
+    F[(comp == 2) & (np.abs(x[2] - 30e-3) < 3e-3), 1] = 1.0                       # an axial one
+    u, lam = pinned_solve(basis, K, Cm, F)
+    ref = elastic.Factorized.of(sp.bmat([[K, Cm.T], [Cm, None]]).tocsr(), np.array([], int)).solve(
+        np.vstack([F, np.zeros((6, 2))]))
+    assert np.abs(u - ref[:basis.N]).max() < 1e-9 * np.abs(ref[:basis.N]).max()
+    assert np.abs(lam - ref[basis.N:]).max() < 1e-9 * np.abs(ref[basis.N:]).max()
+    held = np.flatnonzero(bands[0])
+    ref = elastic.Factorized.of(K, held).solve(F)
+    assert np.abs(held_solve(basis, K, held, F) - ref).max() < 1e-9 * np.abs(ref).max()

@@ -103,7 +103,7 @@ def test_a_stiffness_without_fingerprint_or_edited_by_hand_is_refused(tmp_path, 
         stiffness.load(edited, original)
     old = tmp_path / "old.json"
     old.write_text(json.dumps({**data, "schema": "rv-stiffness/1"}))
-    with pytest.raises(InputError, match=r"schema 'rv-stiffness/1', expected 'rv-stiffness/3': rebuild"):
+    with pytest.raises(InputError, match=r"schema 'rv-stiffness/1', expected 'rv-stiffness/4': rebuild"):
         stiffness.path_for_case(original, old)
 
 

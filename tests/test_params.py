@@ -242,3 +242,17 @@ def test_an_undercut_or_pointed_stage1_is_a_one_line_error_naming_the_allowed_sh
     assert "\n" not in msg and msg.startswith("x.toml: [stage1]")
     for w in words:
         assert w in msg
+
+
+def test_the_si_view_is_the_case_s_sizes_converted_once():
+    # geometry.case_si: m = mm * 1e-3 in the arithmetic the stages used inline (bit for bit)
+    case = load_case(CASES / "rv40e-81.toml")
+    c, m, s1 = case.cycloid, case.modification, case.stage1
+    si = case.si
+    assert si is case.si                                             # made once per case
+    assert si.eccentricity_m == c.eccentricity_mm * 1e-3
+    assert si.modified_pin_circle_radius_m == (c.pin_circle_radius_mm + m.offset_mm) * 1e-3
+    assert si.modified_pin_radius_m == (c.pin_radius_mm + m.equidistant_mm) * 1e-3
+    assert si.sun_pitch_radius_m == s1.module_mm * s1.z1 / 2 * 1e-3
+    assert si.youngs_modulus_Pa == case.material.youngs_modulus_GPa * 1e9
+    assert case.replace("cycloid", eccentricity_mm=1.2).si.eccentricity_m == 1.2e-3   # a copy gets its own

@@ -21,8 +21,9 @@ import numpy as np
 import pytest
 
 import dynamics.signatures as sg
-from dynamics.model import build_model, solve_static
+from dynamics.model import build_model
 from dynamics.results import ARCSEC_PER_RAD
+from dynamics.statics import solve_static
 from fem.stiffness import save
 from geometry.params import load_case
 from pipeline.cli import main

@@ -146,6 +146,11 @@ def random_case(rng):
     raw["crankshaft"] |= dict(eccentric_radius_mm=ecc, needle_diameter_mm=nd, journal_radius_mm=0.7 * ecc,
                               needle_count=int(0.85 * 2 * math.pi * (ecc + nd / 2) / nd),
                               journal_length_mm=0.8 * w, support_span_mm=2.8 * w + 10.0, needle_length_mm=w)
+    # the housing by the case files' rules: a 0.2 R wall outside the grooves, bolts outside it
+    ring = R + Rr + 0.2 * R
+    raw["housing"] |= dict(pin_ring_outer_radius_mm=ring, pin_ring_length_mm=2 * w + 2.0,
+                           bolt_circle_radius_mm=ring + 7.5, bolt_hole_radius_mm=3.3,
+                           flange_outer_radius_mm=ring + 15.0)
     return case_from_dict(raw, source="random draw")
 
 

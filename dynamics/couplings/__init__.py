@@ -23,7 +23,7 @@ inlined there (so the assembled kernel is one function, as fast as the single on
 Chosen over generating the assembler's source from the registry: generated code has no source
 file, so numba could not cache it and every process (12 in the load matrix) would recompile the
 solvers; the registry tuple stays the only list. Order matters for bit-identical sums: mesh,
-support, needle, pin (the order of the original single kernel).
+support, needle, pin (the order of the original single kernel), then housing.
 """
 from __future__ import annotations
 
@@ -33,10 +33,10 @@ import numpy as np
 from numba import literal_unroll
 from numba.extending import overload
 
-from dynamics.couplings import mesh, needle, pin, support
+from dynamics.couplings import housing, mesh, needle, pin, support
 from dynamics.couplings.base import kernel
 
-REGISTRY = (mesh, support, needle, pin)
+REGISTRY = (mesh, support, needle, pin, housing)
 _ADD_BY_PARAMS = {mod.Params: mod.add for mod in REGISTRY}
 
 

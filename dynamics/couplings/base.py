@@ -1,58 +1,34 @@
 """What every coupling kernel shares: the cached-compile decorator, two small numba helpers and the
 compiled pin-profile foot point.
 
-`kernel` is `numba.njit(cache=True)` with one fix. Numba keys a cached function on the content of
-its own source file only, while a caller's cache also holds the machine code of every kernel it
-calls: edit `pin.py` and the cached `integrate` in `dynamics/kernels.py` would keep running the old
-pin code (numba issue #6845). So the stamp of every kernel also covers the content of all files
-of the compiled unit (KERNEL_SOURCES): editing any of them recompiles them all (60-90 s, once).
+`kernel` is `numba.njit` cached on disk for the whole compiled unit (KERNEL_SOURCES: the coupling
+kernels, the solvers and the one pin-profile kernel they call), `dynamics.kernel_cache`: numba
+alone keys a cached function on its own file, while the solvers' machine code holds the inlined
+couplings, so editing `pin.py` would keep running the old pin code (numba issue #6845). Here
+editing any file of the unit compiles them all afresh (60-90 s, once per machine: one process
+compiles, the others load).
 """
 from __future__ import annotations
 
-import hashlib
-import warnings
 from pathlib import Path
 
-import numba
-
 import geometry.pin_profile
+from dynamics.kernel_cache import KernelUnit
 
 _HERE = Path(__file__).resolve().parent
 # the compiled unit: coupling kernels, the solvers and the one pin-profile kernel they call
 KERNEL_SOURCES = tuple(sorted(_HERE.glob("*.py"))) + (_HERE.parent / "kernels.py",
                                                       Path(geometry.pin_profile.__file__).resolve())
-
-
-def sources_digest(paths) -> bytes:
-    """SHA-256 over the names and contents of `paths` (a change anywhere changes it)."""
-    h = hashlib.sha256()
-    for p in paths:
-        h.update(Path(p).name.encode())
-        h.update(Path(p).read_bytes())
-    return h.digest()
-
-
-KERNEL_DIGEST = sources_digest(KERNEL_SOURCES)
+UNIT = KernelUnit(KERNEL_SOURCES)
 
 
 def kernel(fn=None, *, inline: bool = False):
-    """`numba.njit(cache=True)(fn)` whose cache is also invalidated by any file of KERNEL_SOURCES.
-    inline=True inlines the function into its numba callers (numba IR, `inline="always"`): the
-    couplings and the solver steps, so the hot loop is one function as in the single kernel it
-    replaced (measured per time step against that kernel: +14 % without, +3..5 % with; a cold
-    compile of everything takes 60-90 s instead of 50-60 s on the 2-core machine).
-    Falls back to an uncached kernel (correct, compiled per process) if numba's cache internals
-    moved; tests/test_couplings.py fails then, so the fallback cannot go unnoticed."""
-    if fn is None:
-        return lambda f: kernel(f, inline=inline)
-    opts = {"inline": "always"} if inline else {}
-    disp = numba.njit(cache=True, **opts)(fn)
-    cache_file = getattr(getattr(disp, "_cache", None), "_cache_file", None)
-    if cache_file is None or not hasattr(cache_file, "_source_stamp"):
-        warnings.warn(f"numba cache internals changed: {fn.__qualname__} compiled without cache")
-        return numba.njit(**opts)(fn)
-    cache_file._source_stamp = (cache_file._source_stamp, KERNEL_DIGEST)
-    return disp
+    """A kernel of the unit (`KernelUnit.kernel`). inline=True inlines the function into its numba
+    callers (numba IR, `inline="always"`): the couplings and the solver steps, so the hot loop is
+    one function as in the single kernel it replaced (measured per time step against that kernel:
+    +14 % without, +3..5 % with; a cold compile of everything takes 60-90 s instead of 50-60 s on
+    the 2-core machine)."""
+    return UNIT.kernel(fn, inline=inline)
 
 
 def cache_stamp(disp):

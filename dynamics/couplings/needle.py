@@ -59,9 +59,9 @@ def _polar(a, b, radial, tangential, shift=(0.0, 0.0)) -> tuple[np.ndarray, np.n
 def params(case, stiffness, layout, slots) -> Params:
     cy, cr, er = case.cycloid, case.carrier, case.errors
     nc, nd = cr.crank_count, cy.disc_count
-    a = cr.crank_circle_radius_mm * 1e-3
+    a = case.si.crank_circle_radius_m
     b = 2 * np.pi * np.arange(nc) / nc
-    ecc = cy.eccentricity_mm * 1e-3 + _per_crank(er.crank_eccentricity_um, nc)
+    ecc = case.si.eccentricity_m + _per_crank(er.crank_eccentricity_um, nc)
     de1 = _per_crank(er.eccentric_error_um, nc)
     arcmin = math.radians(1.0 / 60.0)
     timing = _per_crank(er.crank_timing_arcmin, nc, arcmin)

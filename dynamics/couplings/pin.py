@@ -32,6 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from dynamics.couplings.housing import modes as housing_modes
 from dynamics.couplings.base import foot_point, interp2, kernel, ramp
 from fem.stiffness import pin_law
 from geometry.params import lobe_sum
@@ -52,26 +53,28 @@ class Params(NamedTuple):
     disc_pitch: np.ndarray         # (nd, L, 3) cumulative pitch lobes: m, amplitude [rad], phase [rad]
     disc_profile_lobes: np.ndarray  # (nd, L2, 3) profile lobes: m, amplitude [m], phase [rad]
     dof: np.ndarray                # (nd, 3) disc x, y, rotation
+    housing_phi: np.ndarray        # (zp, 2, nh) pin k's seat displacement (x, y) per housing modal coordinate
+    housing_dof: np.ndarray        # (nh,) the housing block's indices (dynamics.couplings.housing)
     c0: int                        # offset of the (nd, zp) contacts in the work's contact arrays
 
 
 def params(case, stiffness, layout, slots) -> Params:
-    cy, mod, er = case.cycloid, case.modification, case.errors
+    cy, mod, er, si = case.cycloid, case.modification, case.errors, case.si
     zp, nd = cy.zp, cy.disc_count
     th = 2 * np.pi * np.arange(zp) / zp
     each = lambda v: np.asarray(v, float) * 1e-6 if len(v) else np.zeros(zp)  # noqa: E731
-    Rp = cy.pin_circle_radius_mm * 1e-3 + er.pin_circle_radius_um * 1e-6 + each(er.per_pin_radial_um) \
+    Rp = si.pin_circle_radius_m + er.pin_circle_radius_um * 1e-6 + each(er.per_pin_radial_um) \
         + 1e-6 * lobe_sum(er.pin_radial_lobes, 0, th)
     tp = each(er.per_pin_tangential_um)
-    rp = cy.pin_radius_mm * 1e-3 + er.pin_radius_um * 1e-6 + each(er.per_pin_radius_um)
+    rp = si.pin_radius_m + er.pin_radius_um * 1e-6 + each(er.per_pin_radius_um)
     factor = 1.0 + np.zeros(zp) + lobe_sum(er.pin_stiffness_lobes, 0, th)
-    R_disc = cy.pin_circle_radius_mm * 1e-3      # pitch errors are tangential at the pin circle
+    R_disc = si.pin_circle_radius_m      # pitch errors are tangential at the pin circle
     pos, k_law, n_law, _ = pin_law(stiffness)
     disc = layout["disc"]
+    hm = housing_modes(stiffness, layout)
+    phi = np.zeros((zp, 2, 0)) if hm is None else np.asarray(hm[0].phi, float).reshape(zp, 2, -1)
     return Params(
-        R_m=(cy.pin_circle_radius_mm + mod.offset_mm) * 1e-3,
-        Rr_m=(cy.pin_radius_mm + mod.equidistant_mm) * 1e-3,
-        E_m=cy.eccentricity_mm * 1e-3, zp=float(zp),
+        R_m=si.modified_pin_circle_radius_m, Rr_m=si.modified_pin_radius_m, E_m=si.eccentricity_m, zp=float(zp),
         pins=np.column_stack([Rp * np.cos(th) - tp * np.sin(th), Rp * np.sin(th) + tp * np.cos(th), rp, th,
                               factor]),
         law=np.column_stack([pos, k_law, n_law]).astype(float),
@@ -81,6 +84,8 @@ def params(case, stiffness, layout, slots) -> Params:
         disc_pitch=_disc_lobes(er.disc_pitch_lobes, nd, 1e-6 / R_disc),
         disc_profile_lobes=_disc_lobes(er.disc_profile_lobes, nd, 1e-6),
         dof=np.column_stack([disc.indices("x"), disc.indices("y"), disc.indices("rot")]).astype(np.int64),
+        housing_phi=np.ascontiguousarray(phi),
+        housing_dof=np.zeros(0, np.int64) if hm is None else hm[1],
         c0=slots.contacts("pin", (nd, zp), group=np.repeat(np.arange(nd), zp)))
 
 
@@ -103,6 +108,13 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     R, Rr, E, zp = p.R_m, p.Rr_m, p.E_m, p.zp
     law, pins, dof = p.law, p.pins, p.dof
     npin = pins.shape[0]
+    hphi, hdof = p.housing_phi, p.housing_dof
+    nh = hdof.shape[0]
+    hu = np.zeros((npin, 2))            # each pin seat's displacement with the housing's modes
+    for k in range(npin):
+        for i in range(nh):
+            hu[k, 0] += hphi[k, 0, i] * q[hdof[i]]
+            hu[k, 1] += hphi[k, 1, i] * q[hdof[i]]
     ok = True
     for d in range(dof.shape[0]):
         ix, iy, ia = dof[d, 0], dof[d, 1], dof[d, 2]
@@ -115,7 +127,7 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             if not active[c]:
                 forces[c] = 0.0
                 continue
-            Px, Py, rp, thk = pins[k, 0], pins[k, 1], pins[k, 2], pins[k, 3]
+            Px, Py, rp, thk = pins[k, 0] + hu[k, 0], pins[k, 1] + hu[k, 1], pins[k, 2], pins[k, 3]
             wx, wy = Px - cx, Py - cy
             ca, sa, alk = ca0, sa0, al
             pbx, pby = ca * wx + sa * wy, -sa * wx + ca * wy
@@ -154,6 +166,8 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             F = kk * app ** nn
             kt = nn * kk * max(app, 1e-10) ** (nn - 1.0)
             gd = g_x * v[ix] + g_y * v[iy] + g_a * v[ia]
+            for i in range(nh):              # the seat moves with the housing: d gap = n . d(seat)
+                gd += (ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]) * v[hdof[i]]
             rmp = ramp(app)
             Ft = F - beta * rmp * kt * gd
             if Ft < 0.0:
@@ -163,11 +177,26 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             f[iy] += Ft * g_y
             f[ia] += Ft * g_a
             V += kk * app ** (nn + 1.0) / (nn + 1.0)
+            if nh == 0:
+                if want_k:
+                    gg, ii = (g_x, g_y, g_a), (ix, iy, ia)
+                    for c1 in range(3):
+                        for c2 in range(3):
+                            K[ii[c1], ii[c2]] += kt * gg[c1] * gg[c2]
+                            if Ft > 0.0:
+                                C[ii[c1], ii[c2]] += beta * rmp * kt * gg[c1] * gg[c2]
+                continue
+            gv = np.empty(3 + nh)              # the gap's gradient on (disc x, y, rot, housing modes)
+            iv = np.empty(3 + nh, np.int64)
+            gv[0], gv[1], gv[2], iv[0], iv[1], iv[2] = g_x, g_y, g_a, ix, iy, ia
+            for i in range(nh):
+                gv[3 + i] = ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]
+                iv[3 + i] = hdof[i]
+                f[hdof[i]] += Ft * gv[3 + i]
             if want_k:
-                gg, ii = (g_x, g_y, g_a), (ix, iy, ia)
-                for c1 in range(3):
-                    for c2 in range(3):
-                        K[ii[c1], ii[c2]] += kt * gg[c1] * gg[c2]
+                for c1 in range(3 + nh):
+                    for c2 in range(3 + nh):
+                        K[iv[c1], iv[c2]] += kt * gv[c1] * gv[c2]
                         if Ft > 0.0:
-                            C[ii[c1], ii[c2]] += beta * rmp * kt * gg[c1] * gg[c2]
+                            C[iv[c1], iv[c2]] += beta * rmp * kt * gv[c1] * gv[c2]
     return V, tau_in, ok

@@ -159,7 +159,7 @@ def quasi_static_te(case, stiffness, input_angle_deg: np.ndarray, torque_Nm,
 
 
 def _carrier_deg(model, ang, T, direction) -> np.ndarray:
-    from dynamics.model import quasi_static
+    from dynamics.statics import quasi_static
     res = quasi_static(model, ang, int(direction) * T, int(direction), pin_forces=False)
     return res.input_angle_deg / model.ratio + res.te_arcsec / ARCSEC_PER_DEG   # the mechanics has no reading error
 

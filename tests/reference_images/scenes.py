@@ -82,8 +82,39 @@ def load_sharing(path):
                          title="scene: load sharing")
 
 
+def hysteresis_friction(path):
+    """The loop with a friction loop over it: branches apart by +-0.02 arcmin, width marked."""
+    pct, ang, rated, k, b = _loop()
+    rising = np.diff(pct, prepend=pct[0]) >= 0
+    figures.hysteresis_loop(path, pct, ang, rigidity_Nm_per_arcmin=k, lost_motion_arcmin=0.93, backlash_arcmin=b,
+                            rated_Nm=rated, title="scene: catalog loop with friction", secant_Nm_per_arcmin=0.8 * k,
+                            friction=(pct, ang + np.where(rising, -0.02, 0.02), b + 0.04))
+
+
+def gap_map(path):
+    """Gap linear in torque per speed (measured steeper at low speed), p-p flat + growing."""
+    from pipeline import figures_conditions
+    speed = np.repeat([100.0, 1800.0], 10)
+    T = np.tile(np.linspace(0, 1800, 10), 2)
+    meas = -(25 + np.where(speed < 500, 0.29, 0.24) * T)
+    pred = -(47 + 0.13 * T)
+    figures_conditions.gap_map(path, speed, T, pred, pred + 0.01 * T, 0.1 + 0 * T, 0.12 + 0 * T, gap_meas=meas,
+                               pp_fw_meas=140 + 0.015 * T, pp_bw_meas=138 + 0.015 * T, title="scene: operating map")
+
+
+def efficiency(path):
+    """Catalog-shaped curves: efficiency falling with speed, rising with torque and temperature."""
+    from pipeline import figures_conditions
+    n = np.array([2.0, 5, 10, 15, 20, 30, 40])
+    eff = np.array([[[0.82 - (0.10 - 0.03 * q) * (n / 40) ** 0.7 / (1 + t / 40) - 0.04 * (1 - q)
+                      for q in (0.25, 0.5, 1.0)] for t in (25.0, 40.0, 60.0)]])[0]
+    figures_conditions.efficiency_chart(path, n, (25, 50, 100), (25, 40, 60), eff, published=(15.0, 0.82, 0.80, 0.85),
+                                        title="scene: efficiency chart")
+
+
 SCENES = {"hysteresis": hysteresis, "te_matrix": te_matrix, "load_deflection": load_deflection,
-          "load_sharing": load_sharing}
+          "load_sharing": load_sharing, "hysteresis_friction": hysteresis_friction, "gap_map": gap_map,
+          "efficiency": efficiency}
 
 
 def rms_difference(produced: Path, reference: Path) -> float:

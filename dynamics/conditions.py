@@ -1,0 +1,156 @@
+"""The operating-conditions table (DESIGN.md, `conditions`): its one home, read, validated, written.
+
+Input CONDITIONS.csv: `#` comment lines anywhere, then a header with at least input_speed_rpm,
+torque_Nm, oil_temperature_C (any order; other columns are copied through); one row per condition.
+Refused in one line naming the file, the line, the column, the value and what is allowed: a file
+that is missing, a folder, binary or not UTF-8, over MAX_BYTES; no header or a required column
+missing; a duplicate column; a row with another number of fields; a speed that is not a finite
+number > 0 (the map is of a running reducer); a torque that is not finite and >= 0 (the load's
+magnitude, resisting the motion in both directions); an oil temperature outside the lubricant's
+stated range; no rows; more than MAX_ROWS rows (each row is two static sweeps of one output
+revolution, ~1-2 s of one core: 10^4 rows is ~3 h on 2 cores; split a larger map).
+Output DIR/conditions.csv: each input row with RESULT_COLUMNS appended (TE in the bench convention,
+efficiency forward, empty at zero torque); an input column named like an output column (a measured
+map) is kept beside the prediction as measured_<name>.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from geometry.artifacts import InputError
+
+REQUIRED = ("input_speed_rpm", "torque_Nm", "oil_temperature_C")
+RESULT_COLUMNS = ("te_mean_fw_arcsec", "te_mean_bw_arcsec", "gap_fw_minus_bw_arcsec", "te_pp_fw_arcsec",
+                  "te_pp_bw_arcsec", "efficiency", "input_torque_Nm")
+MAX_ROWS = 10000
+MAX_BYTES = 8 << 20
+MAX_SPEED_RPM = 20000.0      # beyond any servo motor driving an RV reducer
+
+
+class ConditionsError(InputError):
+    """A conditions table that breaks the contract (one line: file, line, column, value, allowed)."""
+
+
+@dataclass(frozen=True)
+class Condition:
+    input_speed_rpm: float
+    torque_Nm: float
+    oil_temperature_C: float
+    line: int                 # line in the file (1-based), for messages
+    fields: tuple             # the row as read, every column, copied through
+
+
+@dataclass(frozen=True)
+class ConditionsTable:
+    source: str
+    header: tuple
+    rows: tuple               # of Condition
+
+
+def _text(path: Path) -> str:
+    name = f"--table {path}"
+    if not path.exists():
+        raise ConditionsError(f"{name}: no such file")
+    if path.is_dir():
+        raise ConditionsError(f"{name}: is a folder; allowed a CSV file")
+    if path.stat().st_size > MAX_BYTES:
+        raise ConditionsError(f"{name}: {path.stat().st_size} bytes; allowed at most {MAX_BYTES} "
+                              f"(a table of at most {MAX_ROWS} conditions)")
+    raw = path.read_bytes()
+    if b"\0" in raw:
+        raise ConditionsError(f"{name}: binary content; allowed a UTF-8 CSV text")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise ConditionsError(f"{name}: not UTF-8 text") from None
+
+
+def _number(text: str, where: str, column: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise ConditionsError(f"{where}: {column} = {text!r}: not a number") from None
+    if not math.isfinite(v):
+        raise ConditionsError(f"{where}: {column} = {text!r}: must be a finite number")
+    return v
+
+
+def read_table(path: str | Path, temperature_range_C: tuple[float, float]) -> ConditionsTable:
+    """Read and validate CONDITIONS.csv (module doc); temperature_range_C: the lubricant's stated range."""
+    path = Path(path)
+    lines = [(i, s) for i, s in enumerate(_text(path).splitlines(), 1) if s.strip() and not s.lstrip().startswith("#")]
+    name = f"--table {path}"
+    if not lines:
+        raise ConditionsError(f"{name}: no header; needs a header with {', '.join(REQUIRED)}")
+    parsed = list(csv.reader(io.StringIO("\n".join(s for _, s in lines))))
+    header = tuple(h.strip() for h in parsed[0])
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise ConditionsError(f"{name}: column {dup[0]!r} appears twice in the header")
+    missing = [c for c in REQUIRED if c not in header]
+    if missing:
+        raise ConditionsError(f"{name}: column {missing[0]!r} missing from the header {','.join(header)!r}; "
+                              f"required: {', '.join(REQUIRED)}")
+    clash = [c for c in RESULT_COLUMNS if f"measured_{c}" in header and c in header]
+    if clash:
+        raise ConditionsError(f"{name}: columns {clash[0]!r} and 'measured_{clash[0]}' both present: the "
+                              f"first would be kept as the second beside the prediction; drop one")
+    n = len(parsed) - 1
+    if n == 0:
+        raise ConditionsError(f"{name}: no condition rows after the header")
+    if n > MAX_ROWS:
+        raise ConditionsError(f"{name}: {n} rows; allowed at most {MAX_ROWS} (each row is two sweeps of one "
+                              f"output revolution, ~1-2 s of a core: split the table)")
+    idx = {c: header.index(c) for c in REQUIRED}
+    lo, hi = temperature_range_C
+    rows = []
+    for (line, _), fields in zip(lines[1:], parsed[1:]):
+        where = f"{name} line {line}"
+        if len(fields) != len(header):
+            raise ConditionsError(f"{where}: {len(fields)} fields; the header has {len(header)}")
+        speed = _number(fields[idx["input_speed_rpm"]].strip(), where, "input_speed_rpm")
+        torque = _number(fields[idx["torque_Nm"]].strip(), where, "torque_Nm")
+        temp = _number(fields[idx["oil_temperature_C"]].strip(), where, "oil_temperature_C")
+        if not 0 < speed <= MAX_SPEED_RPM:
+            raise ConditionsError(f"{where}: input_speed_rpm = {speed:g}: allowed (0, {MAX_SPEED_RPM:g}] rpm "
+                                  f"(a running reducer; the direction is not a sign: both are predicted)")
+        if torque < 0:
+            raise ConditionsError(f"{where}: torque_Nm = {torque:g}: allowed >= 0 (the load's magnitude, "
+                                  f"resisting the motion in both directions)")
+        if not lo <= temp <= hi:
+            raise ConditionsError(f"{where}: oil_temperature_C = {temp:g}: outside the lubricant's stated "
+                                  f"range [{lo:g}, {hi:g}] C ([lubrication] min/max_temperature_C)")
+        rows.append(Condition(speed, torque, temp, line, tuple(fields)))
+    return ConditionsTable(source=str(path), header=header, rows=tuple(rows))
+
+
+def check_torques(table: ConditionsTable, momentary_torque_Nm: float) -> None:
+    """Torques beyond the case's momentary maximum are outside the FE stiffness tables."""
+    for r in table.rows:
+        if r.torque_Nm > momentary_torque_Nm:
+            raise ConditionsError(f"--table {table.source} line {r.line}: torque_Nm = {r.torque_Nm:g}: allowed "
+                                  f"0 to {momentary_torque_Nm:g} (the case's momentary torque)")
+
+
+def measured_name(column: str) -> str:
+    """An input column's name in the output: measured_<name> where it would clash with a result."""
+    return f"measured_{column}" if column in RESULT_COLUMNS else column
+
+
+def _cell(v) -> str:
+    return "" if v is None or (isinstance(v, float) and not math.isfinite(v)) else f"{v:.6g}"
+
+
+def table_text(table: ConditionsTable, results: list[dict]) -> str:
+    """conditions.csv: every input column, then RESULT_COLUMNS (efficiency empty at zero torque)."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow([measured_name(h) for h in table.header] + list(RESULT_COLUMNS))
+    for row, res in zip(table.rows, results):
+        eff = res["efficiency"] if row.torque_Nm > 0 else None
+        w.writerow(list(row.fields) + [_cell(eff if c == "efficiency" else res[c]) for c in RESULT_COLUMNS])
+    return buf.getvalue()

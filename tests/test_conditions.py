@@ -1,0 +1,122 @@
+"""`conditions`: the table contract (dynamics.conditions) as a user meets it, and the operating map of
+the real bench table where ../shared/measured is present.
+
+Bad tables give one `error:` line naming the file, the line, the column, the value and what is allowed,
+exit code 2, no traceback, before any heavy work. A good table gives the contract's columns, the
+input's columns copied through (a measured column named like an output kept as measured_<name>)."""
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import pytest
+
+from dynamics.conditions import MAX_ROWS, RESULT_COLUMNS, ConditionsError, read_table
+from fem.stiffness import save
+from geometry.params import load_case
+from pipeline.cli import main
+from tests.support import stiffness_for_tests
+
+ROOT = Path(__file__).resolve().parents[1]
+CASE = ROOT / "cases" / "rv40e-81.toml"
+MEASURED = ROOT.parent / "shared" / "measured"
+HEAD = "input_speed_rpm,torque_Nm,oil_temperature_C"
+RANGE = (-10.0, 120.0)
+
+
+@pytest.fixture(scope="module")
+def stiffness(tmp_path_factory):
+    path = tmp_path_factory.mktemp("stiff") / "stiffness.json"
+    save(stiffness_for_tests(load_case(CASE)), path)
+    return path
+
+
+def table(tmp_path, text, name="t.csv"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+CORPUS = [
+    ("missing column", "input_speed_rpm,torque_Nm\n100,0\n", "'oil_temperature_C' missing"),
+    ("negative speed", f"{HEAD}\n-100,0,25\n", "input_speed_rpm = -100"),
+    ("zero speed", f"{HEAD}\n0,10,25\n", "input_speed_rpm = 0"),
+    ("NaN torque", f"{HEAD}\n100,nan,25\n", "torque_Nm = 'nan'"),
+    ("negative torque", f"{HEAD}\n100,-5,25\n", "torque_Nm = -5"),
+    ("text", f"{HEAD}\n100,ten,25\n", "torque_Nm = 'ten': not a number"),
+    ("too hot", f"{HEAD}\n100,0,180\n", "oil_temperature_C = 180: outside the lubricant's stated range"),
+    ("too cold", f"{HEAD}\n100,0,-40\n", "oil_temperature_C = -40"),
+    ("ragged", f"{HEAD}\n100,0\n", "2 fields; the header has 3"),
+    ("no rows", f"# only a header\n{HEAD}\n", "no condition rows"),
+    ("empty", "# nothing\n", "no header"),
+    ("duplicate column", f"{HEAD},torque_Nm\n100,0,25,1\n", "'torque_Nm' appears twice"),
+    ("both clash names", f"{HEAD},gap_fw_minus_bw_arcsec,measured_gap_fw_minus_bw_arcsec\n100,0,25,1,1\n",
+     "both present"),
+]
+
+
+@pytest.mark.parametrize("label,text,words", CORPUS, ids=[c[0] for c in CORPUS])
+def test_a_bad_table_gives_one_clear_line_and_exit_code_2(tmp_path, capsys, stiffness, label, text, words):
+    path = table(tmp_path, text)
+    rc = main(["conditions", "--case", str(CASE), "--stiffness", str(stiffness), "--table", str(path),
+               "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert rc == 2, err
+    assert err.startswith("error: ") and err.count("\n") == 1, err
+    assert words in err and str(path) in err, err
+    assert not (tmp_path / "out" / "conditions.csv").exists()
+
+
+def test_a_hundred_thousand_rows_are_refused_at_once_with_the_limit(tmp_path):
+    path = table(tmp_path, HEAD + "\n" + "100,0,25\n" * 100_000)
+    with pytest.raises(ConditionsError, match=f"100000 rows; allowed at most {MAX_ROWS}"):
+        read_table(path, RANGE)
+
+
+def test_a_binary_or_non_utf8_file_or_a_folder_is_refused(tmp_path):
+    b = tmp_path / "b.csv"
+    b.write_bytes(b"input\0speed")
+    with pytest.raises(ConditionsError, match="binary"):
+        read_table(b, RANGE)
+    b.write_bytes(b"input_speed_rpm\xff\xfe")
+    with pytest.raises(ConditionsError, match="not UTF-8"):
+        read_table(b, RANGE)
+    with pytest.raises(ConditionsError, match="folder"):
+        read_table(tmp_path, RANGE)
+    with pytest.raises(ConditionsError, match="no such file"):
+        read_table(tmp_path / "none.csv", RANGE)
+
+
+def test_a_torque_beyond_the_momentary_maximum_is_refused(tmp_path, capsys, stiffness):
+    path = table(tmp_path, f"{HEAD}\n100,5000,25\n")
+    rc = main(["conditions", "--case", str(CASE), "--stiffness", str(stiffness), "--table", str(path),
+               "--out", str(tmp_path / "out")])
+    assert rc == 2 and "momentary torque" in capsys.readouterr().err
+
+
+def test_comments_any_column_order_and_extra_columns_are_read_and_copied_through(tmp_path, capsys, stiffness):
+    path = table(tmp_path, "# bench map\noil_temperature_C,note,torque_Nm,input_speed_rpm,gap_fw_minus_bw_arcsec\n"
+                           "# a comment between rows\n40,slow,0,300,-20\n40,fast,200,1800,-150\n")
+    t = read_table(path, RANGE)
+    assert [(r.input_speed_rpm, r.torque_Nm, r.oil_temperature_C) for r in t.rows] == [(300, 0, 40), (1800, 200, 40)]
+    assert main(["conditions", "--case", str(CASE), "--stiffness", str(stiffness), "--table", str(path),
+                 "--out", str(tmp_path / "out"), "--points-per-rev", "4", "--workers", "1", "--quiet"]) == 0
+    rows = list(csv.DictReader(io.StringIO((tmp_path / "out" / "conditions.csv").read_text())))
+    assert list(rows[0])[:5] == ["oil_temperature_C", "note", "torque_Nm", "input_speed_rpm",
+                                 "measured_gap_fw_minus_bw_arcsec"]
+    assert list(rows[0])[5:] == list(RESULT_COLUMNS)
+    assert rows[0]["note"] == "slow" and rows[0]["efficiency"] == ""         # empty at zero torque
+    assert 0.3 < float(rows[1]["efficiency"]) < 1.0
+    gap = float(rows[1]["gap_fw_minus_bw_arcsec"])
+    assert gap == pytest.approx(float(rows[1]["te_mean_fw_arcsec"]) - float(rows[1]["te_mean_bw_arcsec"]), abs=1e-3)
+    assert gap < float(rows[0]["gap_fw_minus_bw_arcsec"]) < 0        # the gap opens with torque
+
+
+@pytest.mark.skipif(not (MEASURED / "conditions_25C.csv").exists(),
+                    reason="../shared/measured/conditions_25C.csv absent (the real bench map is not shipped)")
+def test_the_real_bench_table_passes_the_contract():
+    t = read_table(MEASURED / "conditions_25C.csv", RANGE)
+    assert len(t.rows) == 47
+    assert {r.input_speed_rpm for r in t.rows} == {100, 300, 900, 1700, 1800}
+    assert all(r.oil_temperature_C == 25 for r in t.rows)

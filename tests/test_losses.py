@@ -1,0 +1,205 @@
+"""Losses and lubrication (dynamics.losses): each law against its closed form or published table, the
+friction statics against the frictionless model and against its own power balance."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from dynamics.losses import Lubricant, bearings as brg, operating_point
+from dynamics.losses import lubricant as lb
+from dynamics.losses.contacts import contact_friction, rates
+from dynamics.losses.operating import friction_loop, starting_torque_Nm
+from dynamics.catalog import hysteresis
+from dynamics.statics import solve_static
+from geometry.lubrication import Lubrication
+from tests.support import model_for_tests
+
+LUB = Lubricant.from_section(Lubrication())
+E_RED = lb.reduced_modulus_Pa(206e9, 0.3)
+
+
+def frictionless(sec: Lubrication) -> Lubricant:
+    return Lubricant.from_section(dataclasses.replace(
+        sec, boundary_friction=0.0, full_film_friction=0.0, f0_needle=0.0, f0_tapered=0.0, f0_main=0.0,
+        f1_needle=0.0, f1_tapered=0.0, output_seal_diameter_mm=0.0, input_seal_diameter_mm=0.0))
+
+
+@pytest.fixture(scope="module")
+def model():
+    return model_for_tests("rv40e-81")
+
+
+# ----------------------------------------------------------------------------- lubricant laws
+def test_walther_passes_through_the_grade_s_two_viscosities_and_is_straight_in_its_own_axes():
+    assert LUB.kinematic_cSt(40.0) == pytest.approx(68.0, rel=1e-9)
+    assert LUB.kinematic_cSt(100.0) == pytest.approx(8.7, rel=1e-9)
+    T = np.array([0.0, 25.0, 60.0, 120.0])
+    y = np.log10(np.log10(LUB.kinematic_cSt(T) + 0.7))
+    x = np.log10(T + lb.KELVIN)
+    assert np.allclose(np.diff(y) / np.diff(x), -LUB.walther_B, rtol=1e-9)
+    assert np.all(np.diff(LUB.kinematic_cSt(T)) < 0)
+
+
+def test_a_lubricant_thicker_when_hot_or_an_inverted_range_is_refused():
+    with pytest.raises(lb.LubricationError, match="viscosity_100C_cSt"):
+        Lubricant.from_section(Lubrication(viscosity_40C_cSt=10.0, viscosity_100C_cSt=12.0))
+    with pytest.raises(lb.LubricationError, match="min_temperature_C"):
+        Lubricant.from_section(Lubrication(min_temperature_C=50.0, max_temperature_C=40.0))
+    with pytest.raises(lb.LubricationError, match="outside the lubricant's stated range"):
+        LUB.check_temperature(150.0)
+
+
+def test_the_central_film_follows_pan_hamrock_s_exponents_and_value():
+    """h_c / R = 2.922 U^0.692 G^0.470 W^-0.166 (Pan & Hamrock 1989): log-slopes in speed, load,
+    viscosity and radius, and one point computed by hand."""
+    eta, u, R, w, a = 0.1, 0.5, 0.01, 2e5, 2e-8
+    h = lb.central_film_m(eta, u, R, w, E_RED, a)
+    U, G, W = eta * u / (E_RED * R), a * E_RED, w / (E_RED * R)
+    assert h == pytest.approx(2.922 * U ** 0.692 * G ** 0.470 * W ** -0.166 * R, rel=1e-12)
+    for arg, slope in ((1, 0.692), (3, -0.166), (0, 0.692)):
+        x = [eta, u, R, w]
+        x2 = list(x)
+        x2[arg] *= 2
+        assert math.log(lb.central_film_m(*x2, E_RED, a) / h, 2) == pytest.approx(slope, abs=1e-12)
+    # radius: U^0.692 W^-0.166 R -> R^(1 - 0.692 + 0.166)
+    assert math.log(lb.central_film_m(eta, u, 2 * R, w, E_RED, a) / h, 2) == pytest.approx(0.474, abs=1e-12)
+
+
+def test_the_central_film_and_the_dowson_higginson_minimum_film_agree_as_two_fits_of_one_solution():
+    """Central film ~ 4/3 of the minimum in line contacts (Hamrock 2004); the two are regressions of
+    different numerical solutions (1977, 1989): 0.9 to 2 times the Dowson-Higginson minimum over two
+    decades of speed and load at RV contact sizes (0.97 at the slowest, heaviest corner)."""
+    for u in (0.01, 0.1, 1.0):
+        for w in (3e4, 3e5, 1e6):
+            r = lb.central_film_m(0.13, u, 4e-3, w, E_RED, 2e-8) / lb.dowson_higginson_min_film_m(0.13, u, 4e-3, w, E_RED, 2e-8)
+            assert 0.9 < r < 2.0, (u, w, r)
+
+
+def test_the_mixed_law_runs_from_boundary_to_full_film_friction_through_the_gaussian_share():
+    assert lb.asperity_share(0.0) == pytest.approx(1.0)
+    assert lb.asperity_share(1.0) == pytest.approx(0.31731, abs=1e-5)     # erfc(1/sqrt 2)
+    assert lb.asperity_share(3.0) == pytest.approx(0.0026998, abs=1e-6)
+    lam = np.linspace(0, 6, 61)
+    mu = lb.mixed_friction(lam, 0.115, 0.04)
+    assert mu[0] == pytest.approx(0.115) and mu[-1] == pytest.approx(0.04, abs=1e-6)
+    assert np.all(np.diff(mu) < 0)
+    assert lb.composite_roughness_m(0.3, 0.4) == pytest.approx(math.sqrt(math.pi / 2) * 0.5e-6)
+
+
+# ----------------------------------------------------------------------------- bearings
+@pytest.mark.parametrize("gamma,table", [(0.01, 52.1), (0.05, 74.1), (0.10, 84.2), (0.15, 88.2), (0.20, 88.7),
+                                         (0.25, 87.0)])
+def test_roller_fc_reproduces_iso_281_table_7(gamma, table):
+    assert brg.roller_fc(gamma) == pytest.approx(table, abs=0.06)
+
+
+def test_the_iso_rating_of_the_derived_support_bearings_is_within_15_percent_of_the_catalogue():
+    from fem.tapered_roller import CATALOGUE
+    for b in (b for b in CATALOGUE if b.designation in ("30203", "32006X")):
+        a = math.degrees(b.alpha_rad)
+        C = brg.dynamic_rating_N(b.roller_count, b.roller_diameter_mm, b.roller_length_mm, b.pitch_diameter_mm, a)
+        assert C == pytest.approx(b.Cr_N, rel=0.15), b.designation
+        C0 = brg.static_rating_N(b.roller_count, b.roller_diameter_mm, b.roller_length_mm, b.pitch_diameter_mm, a)
+        assert C0 == pytest.approx(b.derived_C0r_N, rel=1e-9)
+
+
+def test_a_iso_is_continuous_at_its_kappa_branches_and_capped():
+    for k in (0.4, 1.0):
+        # the standard prints its constants to 5 digits: the branches meet to ~6e-6
+        assert brg.a_iso_roller(k - 1e-12, 0.5) == pytest.approx(brg.a_iso_roller(k, 0.5), rel=1e-4)
+    assert brg.a_iso_roller(4.0, 10.0) == brg.A_ISO_MAX
+    assert brg.a_iso_roller(0.1, 0.01) < 0.2 < brg.a_iso_roller(1.0, 0.5) < brg.a_iso_roller(4.0, 0.5)
+
+
+def test_l10_and_the_palmgren_moments_follow_their_closed_forms():
+    assert brg.l10_revolutions(2000.0, 1000.0) == pytest.approx(2 ** (10 / 3) * 1e6)
+    assert brg.cubic_mean_load_N([1.0, 1.0]) == pytest.approx(1.0)
+    # M0 joins its slow-running floor at nu n = 2000 within 1 % (Palmgren's two branches)
+    assert brg.palmgren_no_load_Nm(2, 20, 99.99, 50) == pytest.approx(brg.palmgren_no_load_Nm(2, 20, 100.0, 50), rel=0.01)
+    assert brg.palmgren_no_load_Nm(2, 100, 100, 50) == pytest.approx(1e-7 * 2 * 1e4 ** (2 / 3) * 50 ** 3 * 1e-3)
+    assert brg.seal_moment_Nm(100.0) * (2 * math.pi * 1000 / 60) == pytest.approx(7.69e-6 * 100 ** 2 * 1000)
+
+
+# ----------------------------------------------------------------------------- friction statics
+def test_with_every_loss_constant_zero_the_operating_point_is_the_frictionless_model(model):
+    lub = frictionless(Lubrication())
+    op = operating_point(model, lub, 1800.0, 200.0, 25.0, points_per_rev=5)
+    ang = op.forward.input_angle_deg
+    te = [solve_static(model, a, 200.0, None, +1).te_arcsec for a in ang]
+    assert np.allclose(op.forward.te_arcsec, te, atol=1e-3)
+    assert op.forward.efficiency == pytest.approx(1.0, abs=1e-12)
+    assert op.input_torque_Nm == pytest.approx(200.0 / model.ratio, rel=1e-6)
+
+
+def test_the_friction_forces_do_exactly_the_negative_work_of_the_power_they_dissipate(model):
+    """f_friction . qdot = -(P_pins + P_needles + P_supports): the generalized friction force and the
+    velocities it is built from are one consistent kinematics."""
+    th = math.radians(7.0)
+    st = solve_static(model, 7.0, 300.0, None, +1)
+    qdot = rates(model, th) * 1800 * math.pi / 30
+    fr = contact_friction(model, LUB, st.q, th, qdot, 25.0)
+    dissipated = fr.power_W["pins"] + fr.power_W["needles"] + fr.power_W["supports"]
+    assert dissipated > 0
+    assert float(fr.force @ qdot) == pytest.approx(-dissipated, rel=1e-9)
+
+
+def test_friction_shifts_forward_and_backward_mirror_each_other_and_widen_the_gap(model):
+    op = operating_point(model, LUB, 1800.0, 300.0, 25.0, points_per_rev=5)
+    dfw = np.mean(op.forward.te_arcsec - op.forward.te_frictionless_arcsec)
+    dbw = np.mean(op.backward.te_arcsec - op.backward.te_frictionless_arcsec)
+    assert dfw == pytest.approx(-dbw, rel=0.05)
+    assert abs(op.gap_arcsec) > abs(op.gap_frictionless_arcsec)
+    assert 0.5 < op.forward.efficiency < 1.0
+
+
+def test_the_film_grows_with_speed_as_u_to_the_0692(model):
+    slow = operating_point(model, LUB, 100.0, 300.0, 25.0, points_per_rev=3)
+    fast = operating_point(model, LUB, 1800.0, 300.0, 25.0, points_per_rev=3)
+    ratio = np.nanmean(fast.forward.pin_film_parameter) / np.nanmean(slow.forward.pin_film_parameter)
+    assert ratio == pytest.approx(18 ** 0.692, rel=0.02)
+    assert np.nanmean(fast.forward.pin_mu) < np.nanmean(slow.forward.pin_mu)
+
+
+def test_more_boundary_friction_costs_efficiency_and_raises_the_starting_torque(model):
+    hi = Lubricant.from_section(Lubrication(boundary_friction=0.15))
+    lo = Lubricant.from_section(Lubrication(boundary_friction=0.08))
+    e = [operating_point(model, x, 300.0, 300.0, 25.0, points_per_rev=3).forward.efficiency for x in (lo, hi)]
+    assert e[0] > e[1]
+    assert starting_torque_Nm(model, lo, 25.0) < starting_torque_Nm(model, hi, 25.0)
+    assert operating_point(model, lo, 300.0, 0.0, 25.0, points_per_rev=3).row()["efficiency"] is None
+
+
+def test_the_frictionless_catalog_loop_width_is_the_catalog_backlash_and_friction_only_widens_it(model):
+    loop = friction_loop(model, LUB, 25.0, points_per_quarter=6)
+    assert loop.width_frictionless_at_zero_arcmin == pytest.approx(hysteresis(model, 6).backlash_arcmin, rel=1e-6)
+    assert loop.width_at_zero_arcmin >= loop.width_frictionless_at_zero_arcmin
+    assert loop.torsional_rigidity_secant_Nm_per_arcmin < loop.torsional_rigidity_Nm_per_arcmin
+
+
+def test_bearing_lives_follow_iso_281_from_the_model_s_loads(model):
+    """Each entry is (C / P)^(10/3) 1e6 revolutions at its speed; the system of all crank bearings
+    lives shorter than its weakest bearing; the speeds are the crank's relative to disc and carrier
+    at the rated output speed: (i - 1) z1 / z2 times it for both (the disc turns with the carrier)."""
+    from dynamics.losses.life import bearing_lives
+    r = bearing_lives(model, LUB, 40.0, points_per_rev=6)
+    c = model.case
+    n_rel = (model.ratio - 1) * c.stage1.z1 / c.stage1.z2 * c.operation.rated_output_speed_rpm
+    for b in r["bearings"]:
+        assert b["speed_rpm"] == pytest.approx(n_rel, rel=1e-6)
+        assert b["L10_h"] == pytest.approx((b["C_N"] / b["P_N"]) ** (10 / 3) * 1e6 / (60 * b["speed_rpm"]), rel=1e-12)
+    assert len(r["bearings"]) == 4 * c.carrier.crank_count     # two needles and two supports per crank
+    assert r["system_L10_h"] < r["weakest_L10_h"]
+    assert r["weakest_L10_over_catalog"] == pytest.approx(r["weakest_L10_h"] / 6000.0)
+
+
+def test_simulate_condition_is_the_operating_point_at_the_record_s_angles(model):
+    from dynamics.losses import simulate_condition
+    from dynamics.losses.operating import revolution_angles_deg
+    op = operating_point(model, LUB, 900.0, 150.0, 30.0, points_per_rev=4)
+    run = simulate_condition(model, LUB, revolution_angles_deg(model, 4), 150.0, -1, 900.0, 30.0)
+    assert np.allclose(run.te_arcsec, op.backward.te_arcsec, atol=1e-9)
+    with pytest.raises(Exception, match="direction"):
+        simulate_condition(model, LUB, [0.0], 150.0, 0, 900.0, 30.0)
