@@ -79,7 +79,7 @@ def test_reading_errors_load_no_part():
 
 def test_a_reading_error_reuses_the_solved_carrier(monkeypatch):
     from support import stiffness_for_tests
-    import dynamics.model as dm
+    import dynamics.statics as dm
     stiff = stiffness_for_tests(CASE)
     calls = []
     real = dm.quasi_static
