@@ -6,7 +6,7 @@ torque, 0.3 arcsec noise and 2^22-count encoders (as the virtual bench):
   rows_2M      one forward record of 2 million rows at 4 kHz (500 s at the case's 1200 rpm input:
                123 output revolutions), written as CSV, then read (dynamics.records.read_records)
                and diagnosed; the requirement is <= 60 s for read + diagnose on this machine.
-1024 simulated points per output revolution. Records are built from one simulated revolution
+The diagnosis' default grid (simulate.default_points_per_rev). Records are built from one simulated revolution
 read periodically (the mechanism repeats each output revolution), so building them is cheap."""
 from __future__ import annotations
 
@@ -55,7 +55,7 @@ def rows_2m(case, stiff, eff) -> dict:
         t0 = time.perf_counter()
         recs = read_records(path)
         t1 = time.perf_counter()
-        d = diagnose(case, stiff, recs, points_per_rev=1024)
+        d = diagnose(case, stiff, recs)
         t2 = time.perf_counter()
     return {"rows_2M_read_s": t1 - t0, "rows_2M_diagnose_s": t2 - t1, "rows_2M_total_s": t2 - t0,
             "rows_2M_revolutions": float(recs[0].output_travel_deg / 360.0), "rows_2M_cause": d.cause,
@@ -77,7 +77,7 @@ def pair_10s(case, stiff, eff) -> dict:
                                  np.interp(t, r.time_s, r.output_angle_deg),
                                  np.interp(t, r.time_s, r.output_torque_Nm), r.comments))
     t0 = time.perf_counter()
-    d = diagnose(case, stiff, dense, points_per_rev=1024)
+    d = diagnose(case, stiff, dense)
     return {"diagnose_wall_s_10s_record_pair": time.perf_counter() - t0,
             "record_duration_s": float(dense[0].time_s[-1]), "samples_per_record": 40001, "cause": d.cause,
             "gain": d.extension.gain if d.extension else None}

@@ -237,10 +237,12 @@ def solve_static(model: ReducerModel, input_angle_deg: float, torque_Nm: float,
 
 
 def quasi_static(model: ReducerModel, input_angle_deg, torque_Nm, direction: int = +1,
-                 t_s=None) -> TEResult:
+                 t_s=None, pin_forces: bool = True) -> TEResult:
     """A sequence of static equilibria (no inertia) along the input angles, warm-started.
     The applied output torque is direction * torque_Nm (record convention), as in `simulate`.
-    t_s defaults to the time at the case's input speed (for records and spectra)."""
+    t_s defaults to the time at the case's input speed (for records and spectra).
+    pin_forces=False skips the per-point force evaluation (a third of the cost) when only the TE
+    is wanted (the diagnosis): pin_force_N is then None and teeth_in_contact zeros."""
     check_direction(direction)
     th = np.deg2rad(np.atleast_1d(np.asarray(input_angle_deg, dtype=float)))
     T = direction * np.broadcast_to(np.asarray(torque_Nm, dtype=float), th.shape).astype(float)
@@ -248,22 +250,25 @@ def quasi_static(model: ReducerModel, input_angle_deg, torque_Nm, direction: int
         raise DynamicsError("quasi_static: input angles and torques must be finite")
     n = len(th)
     carrier = np.empty(n)
-    pf = np.empty((n, model.n_disc, model.case.cycloid.zp))
+    pf = np.zeros((n, model.n_disc, model.case.cycloid.zp))
     w = model.work()
-    q = None
+    q, nom_prev = None, None
     for i in range(n):
         # warm start: rigid-body advance of the last solution (the solver falls back to the
         # touching kinematic pose and torque continuation when the step is too large for it)
-        guess = None if q is None else q + nominal_q(model, th[i]) - nominal_q(model, th[i - 1])
+        nom = nominal_q(model, th[i])
+        guess = None if q is None else q + nom - nom_prev
+        nom_prev = nom
         q, _ = static_q(model, th[i], T[i], guess, direction, w)
-        evaluate(model, q, th[i], w=w)
         carrier[i] = q[model.i_out]
-        pf[i] = model.contacts(w.force)
+        if pin_forces:
+            evaluate(model, q, th[i], w=w)
+            pf[i] = model.contacts(w.force)
     if t_s is None:
         speed = 6.0 * model.case.operation.input_speed_rpm
         t_s = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(np.rad2deg(th)))) / speed])
-    return te_result(model, np.asarray(t_s, float), th, carrier, T, (pf > 0).sum(axis=2), pf,
-                     {"solver": "quasi_static", "direction": direction})
+    return te_result(model, np.asarray(t_s, float), th, carrier, T, (pf > 0).sum(axis=2),
+                     pf if pin_forces else None, {"solver": "quasi_static", "direction": direction})
 
 
 def te_result(model, t, th_in, carrier, T, teeth, pf, meta) -> TEResult:

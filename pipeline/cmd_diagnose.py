@@ -38,7 +38,11 @@ def register(sub) -> None:
     p.add_argument("--no-header", action="store_true", help="records have no header row (needs --columns)")
     p.add_argument("--split-reversals", action="store_true",
                    help="split a record whose motion reverses into one record per direction (default: refuse it)")
-    p.add_argument("--points-per-rev", type=int, default=1024, help="simulated points per output revolution")
+    p.add_argument("--points-per-rev", type=int, default=None,
+                   help="simulated points per output revolution (default: the stroboscopic grid above twice the "
+                        "highest order read, 390 for zp = 40)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local processes solving the records' conditions (default: the machine's cores)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary line")
     p.set_defaults(func=run)
     w = sub.add_parser("paper001", help="paper 001's no-load bench case as a worked example "
@@ -69,11 +73,13 @@ def run_paper001(args) -> int:
     return 0
 
 
-MAX_POINTS_PER_REV = 16384   # 16x the default: the model is solved at every simulated point
+MAX_POINTS_PER_REV = 16384   # 40x the default: the model is solved at every simulated point
 
 
-def check_points_per_rev(value: int, case) -> int:
+def check_points_per_rev(value: int | None, case) -> int | None:
     """Enough points per output revolution to resolve the crank order zp (Nyquist), at most MAX."""
+    if value is None:
+        return None
     lo = 2 * case.cycloid.zp + 2
     if not lo <= value <= MAX_POINTS_PER_REV:
         raise DiagnoseError(f"--points-per-rev = {value}: allowed {lo} to {MAX_POINTS_PER_REV} (at least "
@@ -87,6 +93,8 @@ def run(args) -> int:
     from geometry.params import load_case
     case = load_case(args.case)     # options first, before the diagnosis machinery is imported
     check_points_per_rev(args.points_per_rev, case)
+    if args.workers is not None and not 1 <= args.workers <= 64:
+        raise DiagnoseError(f"--workers = {args.workers}: allowed 1 to 64 local processes")
     from pipeline.diagnosis.diagnose import diagnose
     from pipeline.diagnosis.report import write_report
     from pipeline.diagnosis.simulate import quasi_static_te
@@ -112,7 +120,7 @@ def run(args) -> int:
         te_model = _ticking(quasi_static_te, bar)
     try:
         diag = diagnose(case, stiffness, records, te_model, points_per_rev=args.points_per_rev,
-                        holdout_records=holdout)
+                        holdout_records=holdout, workers=args.workers)
     finally:
         if bar is not None:
             bar.close()
@@ -151,6 +159,7 @@ def _ticking(te_model, bar):
         out = te_model(*a, **k)
         bar.update(1)
         return out
+    wrapped.__wrapped__ = te_model   # still the project's model (simulate.simulate_records)
     return wrapped
 
 

@@ -34,7 +34,8 @@ from pipeline.diagnosis.inputs import check_records
 from pipeline.diagnosis.orders import spectrum_of
 from pipeline.diagnosis.signatures import SignatureSummary, signature_columns, summarise
 from pipeline.diagnosis.significance import Line, noise_floor_arcsec, test_lines
-from pipeline.diagnosis.simulate import TEModel, quasi_static_te, simulate_record
+from pipeline.diagnosis.simulate import (TEModel, default_points_per_rev, max_order as order_limit, process_pool,
+                                         quasi_static_te, simulate_records)
 from pipeline.diagnosis.unexplained import torque_sign_notes, unexplained
 from pipeline.diagnosis.zeros import group_records, offset_columns, remove_offsets, rms
 
@@ -74,7 +75,9 @@ class Diagnosis:
         ext = None
         if self.extension is not None:
             e = self.extension
-            params = {**e.parameters, "model_parameters": e.model_parameters} if e.model_parameters else e.parameters
+            params = {**e.parameters, "model_parameters": e.model_parameters} if e.model_parameters else dict(e.parameters)
+            if e.beyond_range:
+                params["beyond_stated_range"] = dict(e.beyond_range)
             ext = {"causes": list(e.causes), "parameters": params,
                    "residual_rms_arcsec": e.residual_rms_arcsec, "gain": e.gain,
                    "holdout_gain": e.holdout_gain}
@@ -114,27 +117,40 @@ def _feature_orders(summaries, max_order: int, max_count: int = 24) -> tuple[int
 
 
 def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = quasi_static_te, *,
-             points_per_rev: int = 1024, p_enter: float = 1e-3, p_line: float = 1e-3,
-             max_nfev: int = 8, holdout: bool = True, holdout_records: tuple[int, ...] | None = None
-             ) -> Diagnosis:
+             points_per_rev: int | None = None, p_enter: float = 1e-3, p_line: float = 1e-3,
+             max_nfev: int = 8, holdout: bool = True, holdout_records: tuple[int, ...] | None = None,
+             workers: int | None = None) -> Diagnosis:
     """`holdout_records`: indices of records given to hold out (`diagnose --holdout`): never used to
     name or fit a cause, the hold-out gain is computed on exactly them; otherwise `holdout` applies
-    the module's hold-out rule (those records help name the causes, never fit their parameters)."""
+    the module's hold-out rule (those records help name the causes, never fit their parameters).
+    `workers`: local processes solving the records' grids (default: the machine's cores; 1 = none)."""
+    pool = process_pool(workers) if getattr(te_model, "__wrapped__", te_model) is quasi_static_te else None
+    try:
+        return _diagnose(case, stiffness, records, te_model, pool, points_per_rev=points_per_rev, p_enter=p_enter,
+                         p_line=p_line, max_nfev=max_nfev, holdout=holdout, holdout_records=holdout_records)
+    finally:
+        if pool is not None:
+            pool.shutdown()
+
+
+def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_enter, p_line, max_nfev, holdout,
+              holdout_records) -> Diagnosis:
     records, notes = check_records(case, list(records))
+    points_per_rev = default_points_per_rev(case) if points_per_rev is None else int(points_per_rev)
     notes += torque_sign_notes(records)
     groups = group_records(records)
     by_id = {c.id: c for c in registry.CAUSES}   # read now: a cause registered at runtime counts
 
     def te_of(c, s, idx=None):
         idx = range(len(records)) if idx is None else idx
-        return [simulate_record(te_model, c, s, records[k], points_per_rev) for k in idx]
+        return simulate_records(te_model, c, s, [records[k] for k in idx], points_per_rev, pool)
 
     meas = [r.te_arcsec(case.ratio) for r in records]
     sim0 = te_of(case, stiffness)
     resid = [m - s for m, s in zip(meas, sim0)]
     before = remove_offsets(resid, groups)
     noise = noise_floor_arcsec(records, before)
-    max_order = int(min(4 * case.cycloid.zp, points_per_rev // 2 - 1))
+    max_order = int(min(order_limit(case), points_per_rev // 2 - 1))
     n = len(records)
     if holdout_records is not None:
         hold_idx = sorted(set(int(k) for k in holdout_records))
@@ -158,9 +174,12 @@ def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = qu
                                                       {c.cause: c for c in lib.fit_cols}, fit_idx, hold_idx,
                                                       max_nfev)
         notes += ext_notes
+    beyond = (extension.beyond_range or {}) if extension is not None else {}
     findings = _findings(result, lambda s: by_id[s.cause].evidence(
         Evidence(s, case, tuple(records[k] for k in named), tuple(groups[k] for k in named),
-                 tuple(before[k] for k in named), summ[s.cause], stiffness)), set(dropped))
+                 tuple(before[k] for k in named), summ[s.cause], stiffness))
+        + (f" Held at its bound: {beyond[s.cause]}; the rest is unexplained." if s.cause in beyond else ""),
+        set(dropped))
     notes += unexplained(case, records, groups, after if after is not None else before, noise,
                          explained=extension is not None)
     return Diagnosis(findings[0].cause if findings else None, tuple(findings), rms(before),

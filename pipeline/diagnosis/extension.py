@@ -5,14 +5,20 @@ group; the Jacobian comes from the signature library (a linearisation the solver
 steps only; a threshold cause's columns are re-taken by the model at each iterate).
 Bounds: every model the fit evaluates has each parameter inside its cause's physical range
 (`Param.bounds`): p = clip(V z) before `apply`, and parameters that map one to one onto a fit
-coordinate are bounded in the solver too (trust-region reflective). A cause whose fitted
-parameter sits on its bound, or whose parameter the records pull past it (one unbounded
-Gauss-Newton step from the fit: the records ask for more than physics allows, a negative
-clearance, a stiffness beyond 20 x the model), or whose effect on the fitted records (RMS of the TE it adds,
-zero offsets removed) is below the records' noise floor (significance.noise_floor_arcsec), or
-that the fitted records cannot determine (its columns there are a constant offset, or its 95 %
-interval is wider than its physical range), is dropped with a one-line note and the rest
-refitted: it is never reported.
+coordinate are bounded in the solver too (trust-region reflective).
+A cause is named only when it explains what it claims: the features it claims (the order lines
+and means where its fitted effect reaches CLAIM_REL of its largest, weighted by the records'
+noise) must fall by EXPLAINS_SHARE in RMS between the residual before the extension and after
+it; otherwise it is dropped and its lines are left to the unexplained report. A cause whose
+fitted parameter sits on its bound, or whose parameter the records pull past it (one unbounded
+Gauss-Newton step from the fit), is kept AT its bound and flagged "beyond the stated range"
+(`Extension.beyond_range`: what the records ask for beside the range) when its claimed features
+still fall by AT_BOUND_SHARE (it points the right way: a 500 arcsec 1x line from a badly mounted
+encoder is the coaxiality at its bound plus an unexplained rest, never silence); below that it
+is dropped. Dropped too, with a one-line note, and the rest refitted: a cause whose effect on the
+fitted records (RMS of the TE it adds, zero offsets removed) is below the records' noise floor
+(significance.noise_floor_arcsec), or that the fitted records cannot determine (its columns
+there are a constant offset, or its 95 % interval is wider than its physical range).
 gain = 1 - rms_after / rms_before on the fitted records, holdout_gain the same on the held-out
 ones; 95 % confidence intervals from the final Jacobian and the scaled residual variance
 (linearised; t quantile on the residual dof); each cause's `report` turns its fitted model
@@ -31,6 +37,9 @@ from pipeline.diagnosis.zeros import offset_columns, remove_offsets, rms
 REFRESH_STEP = 0.3   # forward-difference step of a re-taken Jacobian column, in library units
 START_SCALES = (0.5, 0.75, 1.0, 1.5)   # coarse scan of a threshold/nonlinear cause's linear start
 AT_BOUND = 1e-3      # a parameter this close to a bound (share of its range) sits on it
+CLAIM_REL = 0.1      # a cause claims the features where its fitted effect is >= this share of its largest
+EXPLAINS_SHARE = 0.5   # ... and must lower the residual there by half (RMS) to be named
+AT_BOUND_SHARE = 0.2   # a cause held at its bound must still lower its claimed features this much
 
 
 @dataclass(frozen=True)
@@ -46,6 +55,8 @@ class Extension:
     outside_bounds: tuple[str, ...] = ()   # kept for callers: the bounded fit leaves it empty
     effect_arcsec: dict | None = None      # cause -> RMS of the TE it adds on the fitted records
     model_parameters: dict | None = None   # cause -> {model parameter: value}: what `compensate` rebuilds
+    beyond_range: dict | None = None       # cause -> what the records ask beyond its range (held at the bound)
+    explained_share: dict | None = None    # cause -> share of its claimed features' RMS it removed
 
 
 @dataclass(frozen=True)
@@ -79,6 +90,8 @@ def extend(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int):
             notes.append(note)
         bad = [c for c in chosen if reasons[c.id]]
         if not bad:
+            notes.extend(f"{cid}: {txt}; reported at its bound, the rest of its lines unexplained"
+                         for cid, txt in (ext.beyond_range or {}).items())
             return ext, after, notes, dropped
         notes.extend(f"{c.id}: {reasons[c.id]}; not reported" for c in bad)
         dropped.extend(c.id for c in bad)
@@ -202,7 +215,8 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int):
     wanted = _unclamped(chosen, cols, (x + step)[:nz])
     cov, tq = _covariance(r_x, J)
     sds = [np.sqrt(np.maximum(np.diag(V @ C @ V.T), 0.0)) for V, C in _blocks(chosen, cols, cov)]
-    reasons, effects = _verdicts(run, chosen, ps, wanted, [tq * sd for sd in sds], lims, fit_idx, sims_after)
+    reasons, effects, beyond, shares = _verdicts(run, chosen, ps, wanted, [tq * sd for sd in sds], lims, fit_idx,
+                                                 sims0, sims_after)
     after = remove_offsets([m - s for m, s in zip(run.meas, sims_after)], run.groups)
     rms_b, rms_a, hold_gain = _gains(run, fit_idx, hold_idx, sims0, sims_after)
     params = _parameters(run.case, run.stiffness, chosen, cols, ps, cov[:nz, :nz], tq, run.te_model)
@@ -210,7 +224,7 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int):
                     float(1.0 - rms_a / rms_b) if rms_b > 0 else 0.0, hold_gain,
                     tuple(run.records[k].name for k in fit_idx), tuple(run.records[k].name for k in hold_idx),
                     (), effects, {c.id: {q.name: float(v) for q, v in zip(c.params(run.case), p)}
-                                  for c, p in zip(chosen, ps)})
+                                  for c, p in zip(chosen, ps)}, beyond, shares)
     return ext, after, reasons, note
 
 
@@ -223,14 +237,17 @@ def _blocks(chosen, cols, cov):
         k += V.shape[1]
 
 
-def _verdicts(run: Run, chosen, ps, wanted, half_ci, lims, fit_idx, sims_after) -> tuple[dict, dict]:
-    """({cause: why it cannot be reported, or None}, {cause: effect RMS on the fitted records}).
+def _verdicts(run: Run, chosen, ps, wanted, half_ci, lims, fit_idx, sims0, sims_after):
+    """({cause: why it cannot be reported, or None}, {cause: effect RMS on the fitted records},
+    {cause: what the records ask beyond its range (kept at its bound)}, {cause: explained share}).
     `wanted`: each cause's parameters one unbounded Gauss-Newton step from the fit (where the
-    records pull them); outside the bounds, or a fit sitting on a bound, is unphysical. A 95 %
-    interval wider than the whole physical range: the records do not determine it."""
-    reasons, effects = {}, {}
+    records pull them); a fit on or pulled past a bound is held there and flagged (module
+    docstring). A 95 % interval wider than the whole physical range: the records do not determine it."""
+    reasons, effects, beyond, shares = {}, {}, {}, {}
     groups = [run.groups[k] for k in fit_idx]
     fitted = [sims_after[k] for k in fit_idx]
+    before = [run.meas[k] - s for k, s in zip(fit_idx, sims0)]
+    after = [run.meas[k] - s for k, s in zip(fit_idx, fitted)]
     for j, (c, p, pw, h, (lo, hi)) in enumerate(zip(chosen, ps, wanted, half_ci, lims)):
         names = [q.name for q in c.params(run.case)]
         vague = [f"{n} +- {v:.3g}" for n, v, a, z in zip(names, h, lo, hi) if 2.0 * v > z - a]
@@ -238,18 +255,48 @@ def _verdicts(run: Run, chosen, ps, wanted, half_ci, lims, fit_idx, sims_after) 
               for b in (a, z) if abs(v - b) <= AT_BOUND * (z - a) or (w - b) * (b - 0.5 * (a + z)) > 0]
         others = [q if i != j else np.zeros_like(q) for i, q in enumerate(ps)]
         without = run.te_of(*_apply(run.case, run.stiffness, chosen, others), fit_idx)
-        effect = rms(remove_offsets([a - b for a, b in zip(fitted, without)], groups))
-        effects[c.id], reasons[c.id] = effect, None
+        effect_ts = [a - b for a, b in zip(fitted, without)]
+        effect = rms(remove_offsets(effect_ts, groups))
+        share = claimed_share(run, fit_idx, effect_ts, before, after)
+        effects[c.id], reasons[c.id], shares[c.id] = effect, None, share
+        rng = ", ".join(f"{n} in [{a:g}, {z:g}]" for n, a, z in zip(names, lo, hi))
         if vague:
             reasons[c.id] = (f"the records do not determine it ({'; '.join(vague)} at 95 %: an interval "
                              f"wider than its physical range)")
-        elif on:
-            reasons[c.id] = (f"the records ask for {'; '.join(on)} (its physical range: "
-                             f"{', '.join(f'{n} in [{a:g}, {z:g}]' for n, a, z in zip(names, lo, hi))})")
         elif effect < run.noise_arcsec:
             reasons[c.id] = (f"its effect on the fitted records ({effect:.3g} arcsec RMS, zero offsets "
                              f"removed) is below their noise floor ({run.noise_arcsec:.3g} arcsec)")
-    return reasons, effects
+        elif on and share < AT_BOUND_SHARE:
+            reasons[c.id] = (f"the records ask for {'; '.join(on)} (its physical range: {rng}) and at the bound it "
+                             f"lowers the features it claims by {share:.0%} only")
+        elif on:
+            beyond[c.id] = f"the records ask for {'; '.join(on)}: beyond the stated range ({rng})"
+        elif share < EXPLAINS_SHARE:
+            reasons[c.id] = (f"it does not explain what it claims: the residual at its lines falls by {share:.0%} "
+                             f"(needed {EXPLAINS_SHARE:.0%})")
+    return reasons, effects, beyond, shares
+
+
+def claimed_share(run: Run, fit_idx, effect_ts, before_ts, after_ts) -> float:
+    """1 - RMS after / RMS before over the features a cause claims (module docstring), zero
+    offsets removed (each group's mean feature less its mean over the group), noise-weighted."""
+    starts = np.r_[0, np.cumsum([fm.size for fm in run.fmaps])]
+    groups = [run.groups[k] for k in fit_idx]
+
+    def feats(ts):
+        f = [run.fmaps[k].apply(x) for k, x in zip(fit_idx, ts)]
+        for g in set(groups):
+            idx = [i for i, gg in enumerate(groups) if gg == g]
+            m = np.mean([f[i][0] for i in idx])
+            for i in idx:
+                f[i][0] -= m
+        return np.concatenate(f) * np.concatenate([run.w[starts[k]:starts[k + 1]] for k in fit_idx])
+
+    eff, bef, aft = feats(effect_ts), feats(before_ts), feats(after_ts)
+    mag = np.abs(eff)
+    claim = mag >= CLAIM_REL * mag.max() if mag.max() > 0 else np.zeros(len(mag), bool)
+    b = float(np.linalg.norm(bef[claim]))
+    return float(1.0 - np.linalg.norm(aft[claim]) / b) if b > 0 else 0.0
 
 
 def _cost(fun, x) -> float:

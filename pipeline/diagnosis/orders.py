@@ -27,7 +27,10 @@ def characteristic_orders(case) -> dict[str, float]:
 
 
 def label_order(case, order: float, tol: float = 0.25) -> str:
-    """Name an order by the characteristic order (or harmonic up to 4) it sits on, else ''."""
+    """Name an order by the characteristic order (or harmonic up to 4) it sits on, else by the
+    crank sideband of a pin-ring order it sits on (m zc +- k n_crank, k = 1, 2: a housing pattern
+    whose load zone the cranks modulate; through this model no cause makes one: a housing
+    stiffness lobe with any crank-side error puts < 0.01 arcsec there), else ''."""
     best = ""
     for name, base in characteristic_orders(case).items():
         for h in (1, 2, 3, 4):
@@ -35,7 +38,15 @@ def label_order(case, order: float, tol: float = 0.25) -> str:
                 label = name if h == 1 else f"{h} x {name.split(' ')[0]}"
                 if not best or h == 1:
                     best = label
-    return best
+    if best:
+        return best
+    zc, n = case.cycloid.zc, case.carrier.crank_count
+    for m in (1, 2, 3, 4):
+        for k in (1, 2):
+            for sg in (1, -1):
+                if abs(order - (m * zc + sg * k * n)) <= tol:
+                    return f"{m} zc {'+' if sg > 0 else '-'} {k * n}: crank sideband of {m * zc}x"
+    return ""
 
 
 def spectrum_of(output_angle_deg: np.ndarray, signal: np.ndarray, closing_deg: float | None = None,

@@ -1,55 +1,219 @@
 """Simulating a record's conditions through the model (the fast quasi-static path).
 
-A record is simulated at its own input angles (decimated to at most `points_per_rev` per output
-revolution, then interpolated back in input angle), at its own torque samples (signed: + resists
-forward rotation) and its direction, all read from the record itself. The mechanism repeats after
-one output revolution (dynamics.statics: every body's phase returns), so a record of several
-revolutions at a steady torque (spread within STEADY_TORQUE of rated) is simulated over one
-revolution at its median torque and read periodically: the cost no longer grows with its length.
-A torque that varies more is followed sample by sample (cost grows with the revolutions). Quasi-static means no
-inertia or damping: valid for the slow, steady runs of a TE bench (speed does not enter), not for
-load transients (a torque that varies within a record is followed statically).
-Zero torque (the bench's "0 N.m" runs) is passed as 0: the model rests on the flank of the
-direction of motion under a vanishing preload (dynamics.model.solve_static), so the no-load TE
-carries half the backlash with the sign of the motion. Angles far from 0 and large torques are the
-static solver's business (period reduction, torque continuation): nothing is shifted or ramped here.
-`TEModel` is the seam to the dynamics stage: any callable with its signature can stand in.
+Each record is simulated at its own torque (signed: + resists forward rotation), direction and
+operating condition (input speed from the samples, oil temperature from `# oil_temperature_C`:
+`record_condition`), all read from the record itself.
+Steady records (torque spread within STEADY_TORQUE of rated, every real bench run): the mechanism
+repeats after one output revolution (dynamics.statics: every body's phase returns), so the model is
+solved once per revolution on a uniform grid of input angles anchored at 0 (`points_per_rev`
+points, default `default_points_per_rev`) and read at the record's angles by trigonometric
+interpolation (exact for every order below the grid's Nyquist order, so the 156x line is not
+attenuated as a linear interpolation between 1024 points would: -7 %); the cost does not grow
+with the record's length. The default grid is the signature atlas's stroboscopic one
+(dynamics.signatures.points_per_rev: a divisor of zp zc above 2 MAX_ORDER, 390 for zp = 40): the
+cycloid-pin mesh ripple (zp zc x, the model's strongest line above MAX_ORDER: 0.04 arcsec on the
+RV-160N) folds onto the mean instead of onto a line. A torque that varies more is followed sample
+by sample on a thinned set of samples (cost grows with the revolutions, linear interpolation).
+Quasi-static means no inertia or damping: valid for the slow, steady runs of a TE bench, not for
+load transients. Zero torque (the bench's "0 N.m" runs) is passed as 0: the model rests on the
+flank of the direction of motion under a vanishing preload (dynamics.model.solve_static).
+
+Caches (content-keyed, never by object id: an id is reused after garbage collection):
+  models    per (case, stiffness content digest `stiffness_digest`);
+  carrier   the carrier angles of a solved grid per (the case's mechanics, stiffness digest, grid,
+            torque, direction, condition): the output encoder's reading errors
+            (READING_FIELDS: coaxiality, reading lobes) do not load any part (dynamics.reducer:
+            they enter only `measured_output_rad`), so a case that differs only in them reuses the
+            solved carrier angles and re-reads them: the signature columns of the reading causes
+            and the fit's repeats of an already solved model cost no solve.
+`TEModel` is the seam to the dynamics stage: any callable with its signature can stand in. It
+receives the record's `Condition` (speed, oil temperature): the quasi-static frictionless model
+does not depend on it yet (the losses model of issue 21 will, through this argument).
 """
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import inspect
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from dynamics.records import BenchRecord
+from dynamics.results import ARCSEC_PER_DEG
 
-# te_model(case, stiffness, input_angle_deg, torque_Nm, direction) -> te_arcsec at those angles;
-# torque_Nm in the record convention (+ resists forward rotation), scalar or one per angle
+# te_model(case, stiffness, input_angle_deg, torque_Nm, direction, condition=None) -> te_arcsec at
+# those angles; torque_Nm in the record convention (+ resists forward rotation), scalar or one per angle
 TEModel = Callable[..., np.ndarray]
 
-_MODELS: dict = {}
-_MODEL_CACHE_SIZE = 64
 STEADY_TORQUE = 0.01   # 5-95 % torque spread / rated torque under which a record is steady
+_CACHE_SIZE = 256
+# Errors fields read only by the output encoder (dynamics.reducer.build_model: coaxiality_rad and
+# reading_lobes enter measured_output_rad alone; tests/test_diagnose_machinery checks the arrays)
+READING_FIELDS = dict(output_coaxiality_um=0.0, output_coaxiality_phase_deg=0.0, output_reading_lobes=())
+_MODELS: dict = {}
+_CARRIERS: dict = {}
+
+
+@dataclass(frozen=True)
+class Condition:
+    """A record's operating condition: input speed [rpm] (from the samples) and oil temperature
+    [degC] (`# oil_temperature_C`, None when the record does not say)."""
+    input_speed_rpm: float
+    oil_temperature_C: float | None = None
+
+
+def record_condition(record: BenchRecord) -> Condition:
+    """The condition a record was run at, read from the record (speed to 0.1 rpm: a cache key)."""
+    return Condition(round(float(record.input_speed_rpm), 1), record.comment_value("oil_temperature_C"))
+
+
+def max_order(case) -> int:
+    """Highest order the diagnosis reads: the pin ring's m <= 4 lobes at m zc (<= 4 zp) and their
+    sidebands at +- n_crank and +- 2 n_crank (a housing pattern modulated by the cranks)."""
+    return 4 * case.cycloid.zp + 2 * case.carrier.crank_count
+
+
+def default_points_per_rev(case) -> int:
+    """The stroboscopic grid above 2 max_order (module docstring): 390 points for zp = 40."""
+    from dynamics.signatures import points_per_rev
+    return points_per_rev(case, max_order(case))
+
+
+def _digest(obj, h) -> None:
+    """Feed a value's content into hash h: dataclasses field by field, arrays by their bytes."""
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        h.update(type(obj).__name__.encode())
+        for f in dataclasses.fields(obj):
+            if f.name not in ("sources", "checks", "made_from"):   # provenance, no physics
+                h.update(f.name.encode())
+                _digest(getattr(obj, f.name), h)
+    elif isinstance(obj, np.ndarray):
+        h.update(str(obj.dtype).encode() + str(obj.shape).encode())
+        h.update(np.ascontiguousarray(obj).tobytes())
+    elif isinstance(obj, dict):
+        for k in sorted(obj, key=str):
+            h.update(str(k).encode())
+            _digest(obj[k], h)
+    elif isinstance(obj, (list, tuple)):
+        h.update(f"{type(obj).__name__}{len(obj)}".encode())
+        for v in obj:
+            _digest(v, h)
+    elif hasattr(obj, "__dict__") and not callable(obj):   # a plain object: its attributes
+        h.update(type(obj).__name__.encode())
+        _digest(vars(obj), h)
+    else:
+        h.update(repr(obj).encode())
+
+
+def stiffness_digest(stiffness) -> str:
+    """Content digest of a stiffness model (its physics; provenance left out)."""
+    h = hashlib.sha256()
+    _digest(stiffness, h)
+    return h.hexdigest()
+
+
+def _mechanics(case):
+    """The case with the output encoder's reading errors removed (READING_FIELDS)."""
+    return dataclasses.replace(case, errors=dataclasses.replace(case.errors, **READING_FIELDS))
+
+
+def _cached(store: dict, key, make):
+    if key not in store:
+        if len(store) >= _CACHE_SIZE:
+            store.clear()
+        store[key] = make()
+    return store[key]
+
+
+def model_for(case, stiffness, digest: str | None = None):
+    """The dynamics model of (case, stiffness), built once per content."""
+    from dynamics.model import build_model
+    key = (case, digest or stiffness_digest(stiffness))
+    return _cached(_MODELS, key, lambda: build_model(case, stiffness))
+
+
+def _carrier_key(case, stiffness, ang: np.ndarray, T: np.ndarray, direction: int, condition) -> tuple:
+    """(cache key, the case's mechanics, stiffness digest) of one solve (module docstring)."""
+    digest = stiffness_digest(stiffness)
+    mech = _mechanics(case)
+    return ((mech, digest, hashlib.sha256(ang.tobytes() + T.tobytes()).hexdigest(), int(direction), condition),
+            mech, digest)
 
 
 def quasi_static_te(case, stiffness, input_angle_deg: np.ndarray, torque_Nm,
-                    direction: int) -> np.ndarray:
-    """TE [arcsec] of the dynamics model's static equilibria (dynamics.model.quasi_static).
+                    direction: int, condition: Condition | None = None) -> np.ndarray:
+    """TE [arcsec] of the dynamics model's static equilibria (dynamics.model.quasi_static, TE only).
 
     torque_Nm is the record's (signed, + resists forward rotation); quasi_static applies
     direction * its argument, so it gets direction * torque_Nm (= |T| for a steady record).
-    Models are cached per (case, stiffness object): a diagnosis re-simulates the same few."""
-    from dynamics.model import build_model
-    from dynamics.statics import quasi_static
-    key = (case, id(stiffness))
-    entry = _MODELS.get(key)
-    if entry is None:
-        if len(_MODELS) >= _MODEL_CACHE_SIZE:
-            _MODELS.clear()
-        entry = _MODELS[key] = (build_model(case, stiffness), stiffness)  # keeps id(stiffness) alive
+    The carrier angles are cached per mechanics (module docstring); the reading is the case's own."""
     ang = np.asarray(input_angle_deg, float)
-    T = int(direction) * np.broadcast_to(np.asarray(torque_Nm, float), ang.shape)
-    return np.asarray(quasi_static(entry[0], ang, T, int(direction)).te_arcsec, float)
+    T = np.ascontiguousarray(np.broadcast_to(np.asarray(torque_Nm, float), ang.shape))
+    key, mech, digest = _carrier_key(case, stiffness, ang, T, direction, condition)
+    carrier = _cached(_CARRIERS, key, lambda: _carrier_deg(model_for(mech, stiffness, digest), ang, T, direction))
+    model = model_for(case, stiffness, digest)
+    out = model.measured_output_rad(np.deg2rad(carrier))
+    return (np.rad2deg(out) - ang / model.ratio) * ARCSEC_PER_DEG
+
+
+def _carrier_deg(model, ang, T, direction) -> np.ndarray:
+    from dynamics.statics import quasi_static
+    res = quasi_static(model, ang, int(direction) * T, int(direction), pin_forces=False)
+    return res.input_angle_deg / model.ratio + res.te_arcsec / ARCSEC_PER_DEG   # the mechanics has no reading error
+
+
+def _solve_grid(mech, stiffness, ang, T, direction) -> np.ndarray:
+    """One grid's carrier angles [deg] (a worker's task: module-level, picklable)."""
+    return _carrier_deg(model_for(mech, stiffness), ang, T, direction)
+
+
+def _prefetch(case, stiffness, records, n: int, pool) -> None:
+    """Solve the steady records' grids missing from the carrier cache on `pool`'s processes."""
+    jobs = {}
+    for r in records:
+        if not _steady(case, r):
+            continue
+        d = r.direction
+        ang = periodic_grid_deg(case, n, d)
+        T = np.full(ang.shape, float(np.median(r.output_torque_Nm)))
+        key, mech, _ = _carrier_key(case, stiffness, ang, T, d, record_condition(r))
+        if key not in _CARRIERS and key not in jobs:
+            jobs[key] = (mech, ang, T, d)
+    if len(jobs) < 2:
+        return
+    futures = {k: pool.submit(_solve_grid, mech, stiffness, ang, T, d) for k, (mech, ang, T, d) in jobs.items()}
+    for k, f in futures.items():
+        _cached(_CARRIERS, k, f.result)
+
+
+def simulate_records(te_model: TEModel, case, stiffness, records, points_per_rev: int | None = None,
+                     pool=None) -> list[np.ndarray]:
+    """simulate_record for each record; with a process `pool` (concurrent.futures) and the
+    project's model (quasi_static_te, possibly wrapped: `__wrapped__`), the steady records'
+    grids are first solved in parallel (results identical: each grid is one deterministic solve)."""
+    n = default_points_per_rev(case) if points_per_rev is None else int(points_per_rev)
+    if pool is not None and getattr(te_model, "__wrapped__", te_model) is quasi_static_te:
+        _prefetch(case, stiffness, records, n, pool)
+    return [simulate_record(te_model, case, stiffness, r, n) for r in records]
+
+
+def process_pool(workers: int | None):
+    """A pool of `workers` local processes (fork: the compiled kernels are inherited), or None
+    for one worker. The caller shuts it down."""
+    import multiprocessing as mp
+    import os
+    from concurrent.futures import ProcessPoolExecutor
+    n = (os.cpu_count() or 1) if workers is None else int(workers)
+    if n <= 1 or "fork" not in mp.get_all_start_methods():
+        return None
+    return ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("fork"))
+
+
+def _steady(case, record: BenchRecord) -> bool:
+    T = record.output_torque_Nm
+    return float(np.subtract(*np.percentile(T, [95, 5]))) <= STEADY_TORQUE * case.rated_torque_Nm
 
 
 def simulation_indices(record: BenchRecord, points_per_rev: int) -> np.ndarray:
@@ -64,19 +228,53 @@ def simulation_indices(record: BenchRecord, points_per_rev: int) -> np.ndarray:
     return np.unique(np.r_[0, idx, len(travel) - 1])
 
 
+def periodic_grid_deg(case, points_per_rev: int, direction: int) -> np.ndarray:
+    """Input angles of one output revolution from 0 in the direction of motion (the solver's
+    warm start follows the motion): the same grid for every record of that direction."""
+    return direction * np.arange(points_per_rev) * (360.0 * case.ratio / points_per_rev)
+
+
+def trig_interp(grid_values: np.ndarray, phase: np.ndarray, upsample: int = 64) -> np.ndarray:
+    """Trigonometric interpolation of one period sampled uniformly (grid_values[k] at phase k / n)
+    at any phase (periodic): zero-padded FFT to upsample x n points, then linear interpolation
+    (error <= (2 pi k / (upsample n))^2 / 8 of a line at order k: 3e-4 at the Nyquist order)."""
+    n = len(grid_values)
+    c = np.fft.rfft(grid_values)
+    m = upsample * n
+    if n % 2 == 0:                   # split the Nyquist term between +- n/2
+        c[-1] *= 0.5
+    fine = np.fft.irfft(c, m) * (m / n)
+    return np.interp(np.mod(phase, 1.0) * m, np.arange(m + 1), np.r_[fine, fine[0]])
+
+
 def simulate_record(te_model: TEModel, case, stiffness, record: BenchRecord,
-                    points_per_rev: int = 1024) -> np.ndarray:
-    """Simulated TE [arcsec] at every sample of `record` (same input angle, torque, direction)."""
+                    points_per_rev: int | None = None) -> np.ndarray:
+    """Simulated TE [arcsec] at every sample of `record` (same input angle, torque, direction and
+    condition). points_per_rev: the grid per output revolution (default_points_per_rev)."""
+    n = default_points_per_rev(case) if points_per_rev is None else int(points_per_rev)
+    cond = record_condition(record)
     T = record.output_torque_Nm
-    spread = float(np.subtract(*np.percentile(T, [95, 5])))
-    if record.output_travel_deg > 1.5 * 360.0 and spread <= STEADY_TORQUE * case.rated_torque_Nm:
+    if _steady(case, record):
         period = 360.0 * case.ratio                      # input degrees per output revolution
-        a0, d = record.input_angle_deg[0], record.direction
-        grid = a0 + d * np.arange(points_per_rev) * (period / points_per_rev)
-        te = np.asarray(te_model(case, stiffness, grid, float(np.median(T)), d))
-        return np.interp(record.input_angle_deg - a0, grid - a0, te, period=period)
-    idx = simulation_indices(record, points_per_rev)
+        d = record.direction
+        grid = periodic_grid_deg(case, n, d)
+        te = np.asarray(_call(te_model, case, stiffness, grid, float(np.median(T)), d, cond), float)
+        return trig_interp(te[::d] if d > 0 else np.r_[te[0], te[:0:-1]], record.input_angle_deg / period)
+    idx = simulation_indices(record, n)
     ang = record.input_angle_deg[idx]
-    te = te_model(case, stiffness, ang, record.output_torque_Nm[idx], record.direction)
+    te = _call(te_model, case, stiffness, ang, record.output_torque_Nm[idx], record.direction, cond)
     order = np.argsort(ang)
     return np.interp(record.input_angle_deg, ang[order], np.asarray(te)[order])
+
+
+def _call(te_model: TEModel, case, stiffness, ang, torque, direction: int, cond: Condition):
+    """te_model with the record's condition when it takes one (a five-argument TEModel is
+    condition-blind, as the quasi-static model was before the seam)."""
+    try:
+        params = inspect.signature(te_model).parameters
+        takes = "condition" in params or any(p.kind is p.VAR_KEYWORD for p in params.values())
+    except (TypeError, ValueError):
+        takes = False
+    if takes:
+        return te_model(case, stiffness, ang, torque, direction, condition=cond)
+    return te_model(case, stiffness, ang, torque, direction)

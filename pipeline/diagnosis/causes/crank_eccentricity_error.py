@@ -1,6 +1,24 @@
-"""crank_eccentricity_error: an eccentric of a crankshaft off its radius (disc 1's journal).
+"""crank_eccentricity_error: the eccentrics of the crankshafts off their nominal positions.
 
-Parameters (e_1 .. e_n) [um]: per crank, the radius error of the eccentric under disc 1 only
+The crank causes together: the crank-order (zp x) line of one disc turned against the other
+comes from where each crank's eccentric centre sits, radially (its radius) and tangentially (its
+eccentric phase, and the crank's timing against its planet gear). The radial error alone puts the
+line in one quadrature per crank pattern, the eccentric phase in the other (the model, RV-40E FE:
+5 um radial on crank 1 -> 3.6 arcsec at -90 deg, 5 um tangential -> 5.4 arcsec at 0 deg, loaded),
+so together they span a zp x line of any phase and amplitude, each within its tolerance's range.
+Parameters, in this order:
+  e_1 .. e_n [um]        per crank, the radius error of disc 1's eccentric (below);
+  phase cos, sin [um]    a zero-mean pattern p_j = c cos(2 pi j / n) + s sin(2 pi j / n) of the
+                         angle between crank j's eccentrics (Errors.eccentric_phase_arcmin), as the
+                         tangential shift E * angle of disc 2's eccentric centre;
+  (timing)               a crank turned against its planet gear (Errors.crank_timing_arcmin) moves
+                         its eccentrics tangentially as well: on the real records a separate timing
+                         pattern was collinear with the eccentric phase (95 % intervals wider than
+                         the range, the whole cause dropped), so the tangential pattern stands for
+                         both; the report says so.
+Bounds: +-50 um radial; tangential +-(60 arcmin x E) / sqrt(2) per component (the case's angle
+errors are validated to 60 arcmin: a pattern's crank value stays inside).
+Radial error details (e_1 .. e_n): per crank, the radius error of the eccentric under disc 1 only
 (added to Errors.eccentric_error_um; e.g. one journal ground off size). Disc 1 alone is displaced,
 so it turns against disc 2 by a misfit at the crankshaft order: a zp x line (the model, RV-40E on
 the tests' stand-in stiffness: 0.85 arcsec per um, linear, nearly torque-independent; 2 zp x and a
@@ -23,10 +41,24 @@ import math
 
 import numpy as np
 
+from geometry.params import ANGLE_ERROR_ARCMIN_MAX
 from pipeline.diagnosis.causes.base import Cause, Evidence, Fitted, Param, ci, per_crank, polar
 
 UNIT_UM = 2.0
 BOUND_UM = 50.0
+ARCMIN_PER_RAD = 60.0 * 180.0 / math.pi
+
+
+def tangential_bound_um(case) -> float:
+    """Largest tangential pattern component [um] whose crank values stay within the case's angle
+    limit (ANGLE_ERROR_ARCMIN_MAX at the eccentricity E), and within BOUND_UM."""
+    return min(BOUND_UM, ANGLE_ERROR_ARCMIN_MAX / ARCMIN_PER_RAD * case.cycloid.eccentricity_mm * 1e3 / math.sqrt(2.0))
+
+
+def crank_pattern(n: int, c: float, s: float) -> np.ndarray:
+    """Zero-mean per-crank values c cos(2 pi j / n) + s sin(2 pi j / n)."""
+    x = 2.0 * np.pi * np.arange(n) / n
+    return c * np.cos(x) + s * np.sin(x)
 
 
 def eccentric_pattern(values_um) -> tuple[float, float, float]:
@@ -42,17 +74,24 @@ class CrankEccentricityError(Cause):
     id = "crank_eccentricity_error"
     description = ("an eccentric of a crankshaft off its radius (disc 1's journal): the disc turns "
                    "at the crankshaft order")
-    signature = "zp x (crankshaft order), nearly independent of load; 2 zp x and a mean shift at light load"
+    signature = "zp x (crankshaft order) of any phase, nearly independent of load; 2 zp x and a mean shift at light load"
     unit_size = UNIT_UM
     dc_even = True
 
     def params(self, case):
+        t = tangential_bound_um(case)
         return tuple(Param(f"eccentric_error_crank{j + 1}_um", "um", (-BOUND_UM, BOUND_UM))
-                     for j in range(case.carrier.crank_count))
+                     for j in range(case.carrier.crank_count)) + tuple(
+            Param(f"eccentric_phase_pattern_{part}_um", "um", (-t, t)) for part in ("cos", "sin"))
 
     def apply(self, case, stiffness, p):
-        d = np.asarray(p, float)
-        return case.with_errors(eccentric_error_um=per_crank(case, "eccentric_error_um", d)), stiffness
+        n = case.carrier.crank_count
+        p = np.asarray(p, float)
+        to_arcmin = ARCMIN_PER_RAD / (case.cycloid.eccentricity_mm * 1e3)
+        return case.with_errors(
+            eccentric_error_um=per_crank(case, "eccentric_error_um", p[:n]),
+            eccentric_phase_arcmin=per_crank(case, "eccentric_phase_arcmin", crank_pattern(n, *p[n:n + 2]) * to_arcmin)
+        ), stiffness
 
     def orders(self, case):
         return (case.cycloid.zp,)
@@ -61,10 +100,17 @@ class CrankEccentricityError(Cause):
         # the zp x line measures the zero-mean pattern A cos(phi - 2 pi j / n) (phi: crank j at
         # 360 j / n deg); a single journal off by e on crank j reads A = 2 |e| / n at
         # phi = 360 j / n (e > 0) or + 180 (e < 0)
-        c, p, cp, tq = self.id, fit.p, fit.cov, fit.tq
-        n = len(p)
+        c, tq = self.id, fit.tq
+        n = fit.case.carrier.crank_count
+        p, cp = fit.p[:n], fit.cov[:n, :n]
         out = {f"{c}_um": [float(v) for v in p],
-               f"{c}_um_ci95": [ci(float(v), float(s), tq) for v, s in zip(p, fit.sd)]}
+               f"{c}_um_ci95": [ci(float(v), float(s), tq) for v, s in zip(p, fit.sd[:n])]}
+        to_arcmin = ARCMIN_PER_RAD / (fit.case.cycloid.eccentricity_mm * 1e3)
+        for k, what in ((n, "eccentric_phase"),):   # or timing: the records cannot separate them
+            a, a_ci, ph, ph_ci = polar(fit.p[k:k + 2], fit.cov[k:k + 2, k:k + 2], tq)
+            out.update({f"{c}_{what}_pattern_um": a, f"{c}_{what}_pattern_um_ci95": a_ci,
+                        f"{c}_{what}_pattern_phase_deg": ph,
+                        f"{c}_{what}_arcmin": [float(v) for v in crank_pattern(n, *fit.p[k:k + 2]) * to_arcmin]})
         Z = 2.0 / n * np.exp(1j * 2 * np.pi * np.arange(n) / n)
         Z = Z - Z.mean()
         M = np.vstack([Z.real, Z.imag])                  # (Re z, Im z) = M p
@@ -95,7 +141,7 @@ class CrankEccentricityError(Cause):
         p = np.zeros(n)
         p[j] = e
         a, ph, _ = eccentric_pattern(p)
-        return tuple(float(v) for v in p), {
+        return tuple(float(v) for v in p) + (0.0,) * 2, {
             "crank_eccentricity_error_um": [float(v) for v in p], "crank_eccentricity_error_crank": j + 1,
             "crank_eccentricity_error_single_um": float(e), "crank_eccentricity_error_amplitude_um": a,
             "crank_eccentricity_error_phase_deg": ph}

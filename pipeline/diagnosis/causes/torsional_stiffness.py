@@ -28,15 +28,15 @@ _BUDGETS: dict = {}
 
 
 def budget(case, stiffness) -> dict:
-    """compliance_budget of the model at rated torque (cached per case name and stiffness object)."""
-    key = (case.name, id(stiffness))
+    """compliance_budget of the model at rated torque (cached per case and stiffness content)."""
+    from pipeline.diagnosis.simulate import model_for, stiffness_digest
+    key = (case, stiffness_digest(stiffness))
     if key not in _BUDGETS:
-        from dynamics.model import build_model
         from dynamics.budget import compliance_budget
         if len(_BUDGETS) > 32:
             _BUDGETS.clear()
-        _BUDGETS[key] = (compliance_budget(build_model(case, stiffness)), stiffness)   # keeps the id alive
-    return _BUDGETS[key][0]
+        _BUDGETS[key] = compliance_budget(model_for(case, stiffness, key[1]))
+    return _BUDGETS[key]
 
 
 def located_component(case, stiffness) -> tuple[str, float]:
