@@ -15,6 +15,7 @@ that the model's largest forces at the momentary torque lie inside the tables.
 """
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass, field
 
@@ -79,6 +80,7 @@ def assemble(case, results: dict, extras: dict) -> StiffnessModel:
         checks.update(r.checks)
         extras.update(r.extras)
     fields.update({k: NESTED[k](**v) for k, v in nested.items() if k in NESTED}, parts=nested["parts"])
+    checks = json.loads(json.dumps(checks))     # as stiffness.json holds them (tuples as lists, keys as str)
     return StiffnessModel(case_name=case.name, sources=sources, checks=checks, extras=extras, **fields)
 
 
