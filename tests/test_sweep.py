@@ -53,7 +53,6 @@ def test_an_fe_sub_problem_on_a_loopback_dask_cluster_equals_the_local_run():
     for key in ("load_N", "deflection_m", "law_k_N_per_m_pow", "law_n"):
         # to round-off: a worker's BLAS may sum in another order (measured ~1e-15)
         assert getattr(a, key) == pytest.approx(getattr(b, key), rel=1e-12, abs=0), key
-    assert local.checks == remote.checks
 
 
 def _nap(seconds):
