@@ -53,11 +53,12 @@ notes. Checks, with their bounds and the input that triggers each:
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.ndimage import median_filter
+
+from dynamics.records import comment_number
 
 ARCSEC_PER_RAD = 180.0 / np.pi * 3600.0
 ARCSEC_PER_ARCMIN = 60.0
@@ -246,22 +247,10 @@ def resample_gaps(name: str, time_s, columns: dict[str, np.ndarray], output_angl
 
 
 # ------------------------------------------------------------------------------- comments
-def stated_value(comments, key: str) -> float | None:
-    """The number of a `<key>: <number>` comment line, if there is one."""
-    for line in comments:
-        m = re.match(rf"\s*{re.escape(key)}\s*[:=]\s*([-+0-9.eE]+)\s*(\S*)\s*$", line)
-        if m:
-            try:
-                return float(m.group(1))
-            except ValueError:
-                return None
-    return None
-
-
 def torque_against_comment(name: str, comments, torque_Nm, rated_torque_Nm: float) -> Finding | None:
     """Error when a stated torque comment disagrees with the torque column."""
     for key in TORQUE_KEYS:
-        stated = stated_value(comments, key)
+        stated = comment_number(comments, key)
         if stated is None:
             continue
         col = float(np.median(torque_Nm))
@@ -280,7 +269,7 @@ def torque_against_comment(name: str, comments, torque_Nm, rated_torque_Nm: floa
 def columns_against_comments(name: str, comments, extra: dict[str, np.ndarray]) -> Finding | None:
     """Error when a comment `<column>: <number>` disagrees with that column of the record."""
     for col, values in extra.items():
-        stated = stated_value(comments, col)
+        stated = comment_number(comments, col)
         v = np.asarray(values, float)
         v = v[np.isfinite(v)]
         if stated is None or not v.size:

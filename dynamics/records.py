@@ -78,6 +78,18 @@ class RecordError(InputError):
     (1-based line of the file) and problem."""
 
 
+def comment_number(comments, key: str) -> float | None:
+    """The number of a `<key>: <number> [unit]` comment line, if there is one (the record's notes)."""
+    for line in comments:
+        m = re.match(rf"\s*{re.escape(key)}\s*[:=]\s*([-+0-9.eE]+)\s*(\S*)\s*$", line)
+        if m:
+            try:
+                return float(m.group(1))
+            except ValueError:
+                return None
+    return None
+
+
 @dataclass(frozen=True)
 class BenchRecord:
     """One bench record as read, with the conditions the diagnosis needs read from the record.
@@ -129,14 +141,7 @@ class BenchRecord:
 
     def comment_value(self, key: str) -> float | None:
         """The number of a `# <key>: <number>` comment (e.g. input_speed_rpm), if there is one."""
-        for line in self.comments:
-            m = re.match(rf"\s*{re.escape(key)}\s*[:=]\s*([-+0-9.eE]+)\s*$", line)
-            if m:
-                try:
-                    return float(m.group(1))
-                except ValueError:
-                    return None
-        return None
+        return comment_number(self.comments, key)
 
     def te_arcsec(self, ratio: float) -> np.ndarray:
         """Transmission error theta_out - theta_in / i (arcsec, positive = output ahead)."""
