@@ -3,16 +3,16 @@ face clamped, Richardson over two meshes (fem.carrier); the 4nc x 4nc seat flexi
 couples the cranks)."""
 from __future__ import annotations
 
-import math
+import dataclasses as dc
 
 import numpy as np
 
 from fem.components.base import Result, timed
+from fem.components.entries import CarrierSeats
 
 NAME = "carrier"
 COUPLING = "support"
 COST = 40
-ARCMIN_PER_RAD = 180 * 60 / math.pi
 
 
 def fe_entry(case, levels=None, joints=None) -> dict:
@@ -29,6 +29,7 @@ def fe_entry(case, levels=None, joints=None) -> dict:
         raise RuntimeError(f"carrier seat order {fe.labels} / angles {fe.crank_angles_rad}: expected crank j "
                            f"at 2 pi j / nc, seats (flange, end plate), (x, y) (fem.stiffness.CarrierSeats)")
     E, nu = case.material.youngs_modulus_GPa * 1e9, case.material.poisson_ratio
+    ARCMIN_PER_RAD = carrier.ARCMIN_PER_RAD
     portal = carrier.portal_frame_reference(g, E, nu)["end_plate_stiffness_Nm_per_rad"] / ARCMIN_PER_RAD
     ex = fe.extrapolation
     check = {"torsional_stiffness_Nm_per_arcmin": fe.torsional_stiffness_Nm_per_arcmin(0.5),
@@ -49,7 +50,6 @@ def fe_entry(case, levels=None, joints=None) -> dict:
 
 @timed
 def compute(case, ctx) -> Result:
-    from fem.components.entries import CarrierSeats
     car = fe_entry(case, ctx.get("carrier_levels"))
     return Result(NAME, {"carrier": CarrierSeats(car["compliance_m_per_N"])},
                   {NAME: "3D FE (P2 tetrahedra, extruded mesh) of flange + end plate + pillars as one bonded "
@@ -59,8 +59,6 @@ def compute(case, ctx) -> Result:
 
 
 def stiffen(model, f: float):
-    from fem.components.entries import CarrierSeats
-    import dataclasses as dc
     return dc.replace(model, carrier=CarrierSeats(model.carrier.compliance_m_per_N / f))
 
 
