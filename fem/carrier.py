@@ -435,12 +435,15 @@ def seat_forces_per_Nm(crank_angles_rad, crank_circle_radius_m: float, flange_sh
 def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_length_m: float | None = None,
                        order: int = 2, plate_modulus_factor: float = 1.0, mesher: str = "extruded",
                        mesh: tuple[Mesh3D, np.ndarray] | None = None, solver: str = "auto",
-                       rtol: float = 1e-10, clamp: str = "face", joints: JointLayers | None = None) -> CarrierFE:
+                       rtol: float = 1e-10, clamp: str = "face", joints: JointLayers | None = None,
+                       every_ring_dof: bool = False) -> CarrierFE | np.ndarray:
     """The carrier's seat flexibility on one mesh (see module). plate_modulus_factor multiplies E
     in both plates (the rigid-plate check); mesh: (tets, regions) made beforehand; solver 'auto'
     (LU up to DIRECT_MAX_DOFS, else two-level PCG), 'direct' or 'pcg'. clamp: 'face' (the whole
     mounting face) or 'bolt_annulus' (the what-if of a flange held by its bolts alone). joints:
-    contact layers of the pillar joint and the mounting face (JointLayers; None: bonded)."""
+    contact layers of the pillar joint and the mounting face (JointLayers; None: bonded).
+    every_ring_dof: return only the (6 nr, 6 nr) flexibility of every ring DOF (ring order of the
+    seats; per ring tx, ty, tz, rx, ry, rz about its centre; fem.crank_path's assembled check)."""
     from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet
     if order not in (1, 2):
         raise ValueError(f"carrier element order = {order!r}: allowed 1, 2")
@@ -487,14 +490,16 @@ def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_lengt
     T, keep = _ring_transform(basis, comp, rings, fixed)
     Kq = (T.T @ K @ T).tocsr()
     nr = len(rings)
-    load = len(keep) + 6 * np.repeat(np.arange(nr), 2) + np.tile([0, 1], nr)
-    F = np.zeros((Kq.shape[0], 2 * nr))
-    F[load, np.arange(2 * nr)] = 1.0
+    load = len(keep) + (np.arange(6 * nr) if every_ring_dof else 6 * np.repeat(np.arange(nr), 2) + np.tile([0, 1], nr))
+    F = np.zeros((Kq.shape[0], len(load)))
+    F[load, np.arange(len(load))] = 1.0
     if solver == "direct" or order == 1 or (solver == "auto" and Kq.shape[0] <= DIRECT_MAX_DOFS):
         node = np.concatenate([keep // 3, basis.N // 3 + np.repeat(np.arange(nr), 6)])   # skfem interleaves xyz
         U, its = node_ordered_lu_solve(Kq, node, F), 0
     else:
         U, its = two_level_pcg(Kq, _p1_coarse_space(basis, msk, T, keep, nr), F, rtol=rtol)
+    if every_ring_dof:
+        return 0.5 * (U[load] + U[load].T)
     C_raw = U[load]
     u = T @ U                                           # (N, 4nc) displacement fields
     # equilibrium: the clamp reactions balance each unit seat force and its moment about the axis

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from fem import bearing, pin_contact
+from fem import bearing, crank_path, pin_contact
 from fem.components import REGISTRY, by_name
 from fem.components.needle_bearings import force_classical_N as needle_force_classical_N
 from fem.stiffness import PinSeries, StiffnessModel
@@ -60,9 +60,13 @@ def task_context(case, **options) -> dict:
     return dict(options, loads=table_loads_N(case), load_margin=LOAD_MARGIN)
 
 
+ASSEMBLY_CHECKS = {crank_path.NAME: crank_path}   # checks of the reduction: prepare (a pool task), check(model)
+
+
 def _compute(name: str, case, ctx: dict):
-    """One component's FE or closed form (a task: pure, picklable in and out)."""
-    return by_name(name).compute(case, ctx)
+    """One component's FE or closed form, or an assembly check's FE part (a task: pure, picklable
+    in and out)."""
+    return ASSEMBLY_CHECKS[name].prepare(case, ctx) if name in ASSEMBLY_CHECKS else by_name(name).compute(case, ctx)
 
 
 NESTED = {"pin_series": PinSeries}   # StiffnessModel fields assembled from several components' "<field>.<key>";
@@ -86,9 +90,10 @@ def assemble(case, results: dict, extras: dict) -> StiffnessModel:
 
 def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: float | None = None,
                     positions_deg=None, crank_mesh=None, map_tasks=None, carrier_levels=None,
-                    disc_h_profile_m: float | None = None) -> FemRun:
+                    disc_h_profile_m: float | None = None, assembly_checks: bool = True) -> FemRun:
     """crank_mesh: the crankshaft tet mesh of the mesh stage (fem.shaft.crankshaft_mesh), else made here.
-    carrier_levels, disc_h_profile_m: coarser meshes than the defaults (tests).
+    carrier_levels, disc_h_profile_m: coarser meshes than the defaults (tests). assembly_checks: run
+    ASSEMBLY_CHECKS (fem.crank_path: the crank path assembled as one FE model) into `checks`.
     The components are independent, run through `map_tasks(func, tasks) -> results in order`
     (default: one after the other, in this process; pipeline.sweep.run_tasks puts them on local
     processes or a Dask cluster, same results)."""
@@ -96,8 +101,10 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
     map_tasks = map_tasks or (lambda func, tasks: [func(*t) for t in tasks])
     ctx = task_context(case, positions_deg=positions_deg, mesh_size_m=mesh_size_m, crank_edge_m=crank_edge_m,
                        crank_mesh=crank_mesh, carrier_levels=carrier_levels, disc_h_profile_m=disc_h_profile_m)
-    names = [c.NAME for c in sorted(REGISTRY, key=lambda c: -c.COST)]   # longest first: the pool takes them in order
+    checks = ASSEMBLY_CHECKS if assembly_checks else {}
+    names = [c.NAME for c in sorted((*REGISTRY, *checks.values()), key=lambda c: -c.COST)]   # longest first
     results = dict(zip(names, map_tasks(_compute, [(n, case, ctx) for n in names])))
+    prepared = {n: results.pop(n) for n in checks}
     for c in REGISTRY:
         if hasattr(c, "refine"):
             r = c.refine(case, results)
@@ -117,6 +124,9 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
                                    "pin_classical_at_momentary_N": float(tables["pin"][-1] / LOAD_MARGIN),
                                    "needle_classical_at_momentary_N": float(tables["needle"][-1] / LOAD_MARGIN),
                                    "margin": LOAD_MARGIN}
+    for n, mod in checks.items():
+        model.checks[n] = json.loads(json.dumps(mod.check(case, model, prepared[n])))
+        model.sources[n] = mod.__doc__.split("\n\n")[0].replace("\n", " ")
     model.check(case.name)
     artifacts = {k: v for r in results.values() for k, v in r.artifacts.items()}
     return FemRun(model, tm, artifacts["crank_fields"], artifacts)

@@ -149,7 +149,9 @@ def summary_line(m, seconds: float, path) -> str:
             f"{ch['carrier']['torsional_stiffness_Nm_per_arcmin']:.0f} N m/arcmin; disc body "
             f"{1e-6 / m.pin_series.disc_body_compliance_m_per_N:.0f} N/um per pin; groove "
             f"{ch['pin_groove']['tangent_at_rated_N_per_m'] / 1e6:.0f} N/um at rated; crank torsion "
-            f"{m.crankshaft_torsional_stiffness_Nm_per_rad:.0f} N m/rad; {seconds:.0f} s -> {path}")
+            f"{m.crankshaft_torsional_stiffness_Nm_per_rad:.0f} N m/rad;"
+            + (f" crank path assembled/lumped {ch['crank_path']['crank_path_assembled_over_lumped']:.3f};"
+               if "crank_path" in ch else "") + f" {seconds:.0f} s -> {path}")
 
 
 def _write_meshes(runres, out: Path) -> None:
