@@ -22,7 +22,11 @@ ASSUMED: a housing wall down to ~6 mm between supports ~40 mm apart, read as a b
 under one seat's load (F L^3 / 48 E I with b = 40 mm: ~9 um/kN), bounds what a built housing's
 thin spots add; the housing FE's own seats are stiffer by one to two orders. A line larger than
 the bound can make is reported at the bound, "beyond the stated range", the rest unexplained
-(extension.py). Unit size 1 um/kN. Virtual bench: one lobe, 4-8 um/kN, any phase.
+(extension.py): on the real RV-160N records (FE stiffness, 2026-11-27) the 156x line asks for
+m = 4 at ~890 um/kN, held at 10. Limit: the pattern is one-sided, so its mean softening (A_m)
+trades with torsional_stiffness's factor (there 3.11 -> 2.44); a pattern around the FE seat
+(stiffer and softer) needs the FE seat's own compliance as its floor. Unit size 1 um/kN.
+Virtual bench: one lobe, 4-8 um/kN, any phase.
 History: until issue 23b this cause scaled each pin's whole series law (tooth FE, disc body and
 groove: a Hertzian law), which saturates with torque and could not make a line growing with it.
 """
