@@ -164,6 +164,23 @@ def _continuation(model, th, T, qk, w):
     return q, total, 0 if frac >= 1.0 else max(status, 1)
 
 
+def _from_above(model, th, T, qk, w):
+    """The zero-load state as the limit of the loaded flank: torque 1000 T, 100 T, 10 T, T, each
+    warm-started from the last (q, iterations, status). Needed where the rigid touching pose is not
+    touching in the elastic one: a build whose cranks fight (per-crank eccentricity or timing errors)
+    deforms under its own internal preload and opens the flank by a fraction of a micrometre; the
+    vanishing preload T cannot cross that free play, since the work it does there is below the
+    potential's consistency error (PI_RTOL of the stored internal energy), so Newton finds no
+    acceptable step (rv160n stand-in with a fitted crank pattern, 0 N m: status 2)."""
+    q, total, status = qk, 0, 1
+    for k in (3, 2, 1, 0):
+        q, it, status = _newton(model, th, T * 10.0 ** k, q, w)
+        total += it
+        if status != 0 or not _on_branch(model, th, q):
+            return q, total, max(status, 3)
+    return q, total, status
+
+
 def static_q(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0: np.ndarray | None,
             flank: int = +1, w=None) -> tuple[np.ndarray, int]:
     """State vector q of the static equilibrium at input_rad [rad] under the record torque, robust by
@@ -189,6 +206,9 @@ def static_q(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0:
         status = 3                       # a neighbouring tooth's equilibrium: approach it gradually
     if status != 0:
         q, it, status = _continuation(model, th, T, qk, w)
+        total += it
+    if status != 0 and abs(T) <= floor:
+        q, it, status = _from_above(model, th, T, qk, w)
         total += it
     if status != 0:
         raise DynamicsError(f"static equilibrium not found at input {np.rad2deg(input_rad):.6g} deg, "
@@ -223,6 +243,7 @@ def solve_static(model: ReducerModel, input_angle_deg: float, torque_Nm: float,
       3. else (or if that fails) from `kinematic_q`: the rigid pose with the loaded flank
          (the flank the torque's sign loads) just touching, so no free play is left to cross;
       4. if that fails, torque continuation 0 -> T from the touching pose with adaptive steps.
+      5. at zero load, if that fails too, the loaded flank's limit: 1000 T down to T (`_from_above`).
     Zero load: the output floats in the backlash, so |T| < ZERO_LOAD_FRACTION x rated is solved
     at that vanishing preload (4 mN m on the RV-40E: TE change < 0.01 arcsec) on the flank of
     `direction` (the flank of the direction of motion that a running reducer's drag closes);

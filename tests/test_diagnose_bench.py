@@ -46,7 +46,7 @@ def _truth_key(cause, truth):
     """The drawn size's key: fixed per cause, or the drawn lobe's (pin ring, housing)."""
     if cause in TRUTH_KEY:
         return TRUTH_KEY[cause]
-    return next(k for k, v in truth.items() if k.endswith(("_um", "_fraction")))
+    return next(k for k, v in truth.items() if k.endswith(("_um", "_fraction", "_um_per_kN")))
 
 
 def _records(effects, seed, torque_fractions=(0.03, 0.3, 0.6)):
@@ -54,12 +54,12 @@ def _records(effects, seed, torque_fractions=(0.03, 0.3, 0.6)):
                          torque_fractions=torque_fractions)
 
 
-# Known failures on the merged main (2026-11-27, issues 20 + 23 landed together, never run together
-# before): with the housing modes and joints in the stand-in stiffness, pin-ring patterns come back as
-# backlash, the housing pattern explains < 0.6 (its cause still scales the pin law, not the housing
-# modes) and one crank draw misses: open work of issue 23, not silenced by a tolerance.
-KNOWN_FAILING = {("crank_eccentricity_error", 1), ("pin_ring_pattern", 0), ("pin_ring_pattern", 1),
-                 ("housing_stiffness_pattern", 0), ("housing_stiffness_pattern", 1)}
+# Known failures (measured 2026-11-27 on issue-23b, RV-40E stand-in with its housing mode and joints):
+# crank_eccentricity_error seed 1 is named right but its single journal comes back 2.29 um for a drawn
+# -6.16 um (the fit lands on another member of the crank pattern family); pin_ring_pattern seeds 0/1
+# are named backlash first (scores 0.37 / 0.20; pin_ring_pattern 0.0003 / 0.087; why the pattern's
+# lines do not lead is not yet found). Open work of issue 23, not silenced by a tolerance.
+KNOWN_FAILING = {("crank_eccentricity_error", 1), ("pin_ring_pattern", 0), ("pin_ring_pattern", 1)}
 
 
 @pytest.mark.parametrize("cause,seed", [pytest.param(c, s, marks=pytest.mark.xfail(

@@ -83,9 +83,7 @@ def test_real_bench_records_name_coaxiality_and_stiffness():
     assert d.extension.gain > 0.6 and d.extension.holdout_gain > 0.6
 
 
-@pytest.mark.parametrize("torques", [pytest.param(("0",), marks=pytest.mark.xfail(
-    reason="issue 23: on the merged main the zero-torque pair alone ends in 'static equilibrium not found' "
-           "(exit 2, one line, no traceback) on the assembled-reducer stand-in", strict=False)), ("0", "800")])
+@pytest.mark.parametrize("torques", [("0",), ("0", "800")])
 def test_real_zero_torque_pairs_end_with_a_result_not_a_traceback(tmp_path, capsys, torques):
     # issue 13: ValueError "stiffness factor -1.8e-05: must be > 0" on exactly these inputs
     if not MEASURED.is_dir():

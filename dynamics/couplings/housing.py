@@ -9,6 +9,7 @@ entry): nothing to add.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -31,6 +32,27 @@ def modes(stiffness, layout):
     if hm is None or "housing" not in names or layout["housing"].count != len(hm.stiffness_N_per_m):
         return None
     return hm, layout["housing"].indices(0)
+
+
+SEATS = "housing_seats"   # stiffness.parts key of a SeatCompliance (in memory only: the diagnosis' causes)
+
+
+@dataclass(frozen=True)
+class SeatCompliance:
+    """Pin seats softer than the housing FE: an added compliance c_k [m/N] at pin k's seat, local
+    (a load on pin k moves only its own seat) and isotropic in the ring's plane. Each such seat is
+    a housing mode of its own (phi = the unit vector at pin k, stiffness 1 / c_k) whose massless
+    coordinate the pin coupling condenses exactly into the contact: the seat in series with the
+    pin law along the contact normal (dynamics.couplings.pin), no DOF added. Limit: the two discs'
+    contacts on one pin each see the whole seat (their load zones lie 180 deg apart, so a pin
+    carries one disc's load at a time but for the lightly loaded pins at the zones' ends)."""
+    compliance_m_per_N: np.ndarray     # (zp,) >= 0
+
+
+def seat_compliance(stiffness, zp: int) -> np.ndarray:
+    """(zp,) the added seat compliances [m/N] of the stiffness (zeros without a SeatCompliance)."""
+    sc = stiffness.parts.get(SEATS)
+    return np.zeros(zp) if sc is None else np.asarray(sc.compliance_m_per_N, float).reshape(zp)
 
 
 def params(case, stiffness, layout, slots) -> Params:

@@ -18,6 +18,9 @@ As-built errors (case.errors, geometry.params.Errors), all through this same gap
          lobes: the pin centres and radii of `pins`; pin support (groove) stiffness lobes: a
          multiplier on each pin's law (column 4 of `pins`; the whole series law is scaled, ASSUMED:
          the refitted law does not separate the groove's share);
+  seats  pin seats softer than the housing FE (dynamics.couplings.housing.SeatCompliance, a
+         stiffness part the diagnosis sets): compliance sk in series with the law along the normal,
+         approach = dc + sk F(dc), solved per contact (`_series_approach`), V = law energy + sk F^2 / 2;
   discs  disc-to-disc phase (disc 2's profile turned), uniform profile error per disc (material
          added closes the gap), cumulative pitch lobes (the profile turned locally by
          amplitude / R) and profile lobes (normal), both read at the polar angle of the pin centre
@@ -32,7 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dynamics.couplings.housing import modes as housing_modes
+from dynamics.couplings.housing import modes as housing_modes, seat_compliance
 from dynamics.couplings.base import foot_point, interp2, kernel, ramp
 from fem.stiffness import pin_law
 from geometry.params import lobe_sum
@@ -46,7 +49,8 @@ class Params(NamedTuple):
     Rr_m: float                    # pin radius of the profile, Rr + dRr
     E_m: float                     # eccentricity of the profile
     zp: float                      # pins
-    pins: np.ndarray               # (zp, 5) actual pins: x [m], y [m], radius [m], angle [rad], law factor
+    pins: np.ndarray               # (zp, 6) actual pins: x [m], y [m], radius [m], angle [rad], law factor,
+    #                                added seat compliance [m/N] (dynamics.couplings.housing.SeatCompliance)
     law: np.ndarray                # (P, 3) pin phase [deg], k [N/m^n], n
     disc_rotation_rad: np.ndarray  # (nd,) profile rotation in each disc's body frame
     disc_profile_m: np.ndarray     # (nd,) uniform profile error, + material added
@@ -76,7 +80,7 @@ def params(case, stiffness, layout, slots) -> Params:
     return Params(
         R_m=si.modified_pin_circle_radius_m, Rr_m=si.modified_pin_radius_m, E_m=si.eccentricity_m, zp=float(zp),
         pins=np.column_stack([Rp * np.cos(th) - tp * np.sin(th), Rp * np.sin(th) + tp * np.cos(th), rp, th,
-                              factor]),
+                              factor, seat_compliance(stiffness, zp)]),
         law=np.column_stack([pos, k_law, n_law]).astype(float),
         disc_rotation_rad=np.deg2rad(mod.rotation_deg) + np.pi * np.arange(nd)
         + np.array([0.0, er.disc_phase_um * 1e-6 / R_disc])[:nd],
@@ -98,6 +102,21 @@ def _disc_lobes(rows, nd: int, scale: float) -> np.ndarray:
         for i, (_, m, a, ph) in enumerate(rs):
             out[d, i] = m, a * scale, np.radians(ph)
     return out
+
+
+@kernel(inline=True)
+def _series_approach(app, kk, nn, sk):
+    """The contact's own approach dc of app = dc + sk kk dc^nn (a seat of compliance sk in series):
+    Newton from dc = app, monotone from above (the left side is increasing and convex for nn >= 1)."""
+    dc = app
+    for _ in range(50):
+        g = dc + sk * kk * dc ** nn - app
+        dg = 1.0 + sk * nn * kk * max(dc, 1e-300) ** (nn - 1.0)
+        step = g / dg
+        dc = max(dc - step, 0.5 * dc)
+        if abs(step) <= 1e-14 * app:
+            break
+    return dc
 
 
 @kernel(inline=True)
@@ -163,8 +182,17 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             kk, nn = interp2(ph, law)
             kk *= pins[k, 4]
             app = -gap
-            F = kk * app ** nn
-            kt = nn * kk * max(app, 1e-10) ** (nn - 1.0)
+            sk = pins[k, 5]
+            if sk > 0.0:                     # a softer seat in series: app = dc + sk F(dc)
+                dc = _series_approach(app, kk, nn, sk)
+                F = kk * dc ** nn
+                ktc = nn * kk * max(dc, 1e-10) ** (nn - 1.0)
+                kt = ktc / (1.0 + sk * ktc)
+                Vc = kk * dc ** (nn + 1.0) / (nn + 1.0) + 0.5 * sk * F * F
+            else:
+                F = kk * app ** nn
+                kt = nn * kk * max(app, 1e-10) ** (nn - 1.0)
+                Vc = kk * app ** (nn + 1.0) / (nn + 1.0)
             gd = g_x * v[ix] + g_y * v[iy] + g_a * v[ia]
             for i in range(nh):              # the seat moves with the housing: d gap = n . d(seat)
                 gd += (ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]) * v[hdof[i]]
@@ -176,7 +204,7 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             f[ix] += Ft * g_x
             f[iy] += Ft * g_y
             f[ia] += Ft * g_a
-            V += kk * app ** (nn + 1.0) / (nn + 1.0)
+            V += Vc
             if nh == 0:
                 if want_k:
                     gg, ii = (g_x, g_y, g_a), (ix, iy, ia)

@@ -120,11 +120,16 @@ def _mechanics(case):
 
 
 def _cached(store: dict, key, make):
-    if key not in store:
-        if len(store) >= _CACHE_SIZE:
-            store.clear()
-        store[key] = make()
-    return store[key]
+    """store[key], made once; the least recently used entry leaves when the store is full (a fit
+    revisits the unperturbed model's solves between its steps: clearing everything lost them)."""
+    if key in store:
+        store[key] = store.pop(key)          # most recently used last
+        return store[key]
+    value = make()
+    while len(store) >= _CACHE_SIZE:
+        store.pop(next(iter(store)))
+    store[key] = value
+    return value
 
 
 def model_for(case, stiffness, digest: str | None = None):

@@ -1,50 +1,80 @@
-"""housing_stiffness_pattern: the pins' support stiffness varying around the housing in m lobes.
+"""housing_stiffness_pattern: the housing's pin seats softer in m lobes around the ring.
 
-Parameters (c_m, s_m) [1] per harmonic m in `harmonics`: each pin's support law (groove and
-housing behind it) multiplied by 1 + c_m cos(m theta) + s_m sin(m theta) at pin angle theta, added
-as rows of Errors.pin_stiffness_lobes (dynamics.couplings.pin: the load sharing among the pins
-follows). Signature (the model, RV-160N FE stiffness, per 0.1): no line at zero torque, m zc x
-lines growing with it (m = 2: 0.34 arcsec at 300 N.m, 1.09 at 1800 N.m at 78x; m = 4: 0.23 ->
-0.35 at 156x); odd m largely cancel between the two discs (180 deg apart) as for the pin
-positions. The atlas (dynamics.signatures.groups) puts each lobe in a group of its own: the same
-orders as pin_ring_pattern, told apart by the growth with torque.
-Bounds: +-0.3 per component: two harmonics of magnitude <= 0.42 each leave every pin >= 0.15 of
-its law (the geometry's floor is 0.1, a broken groove; +-0.6 with two harmonics let the real
-records' fit step to -0.23 and abort). ASSUMED: a housing's wall thickness, ribs and bolt holes vary the
-pins' radial support by less than this. Harmonics (2, 4): the 78x and 156x lines that grow with
-torque on a real RV bench (156x from 2.7 to 7.1 arcsec, DESIGN.md); odd lobes cancel between the
-discs. The cause acts only through the model's pin support stiffness parameter
-(Errors.pin_stiffness_lobes), never through a hand-made line: today dynamics.couplings.pin scales
-each pin's whole series law with it (tooth FE + disc body + groove), a Hertzian path that carries
-~14 % of the output compliance, so a lobe of 0.3 gives ~1.1 arcsec at 156x at rated torque on the
-RV-40E, saturating with torque; ASSUMED for the assembled-reducer work (issue 20, an elastic
-housing condensed to the pins' support compliance): the same parameter will modulate that
-housing compliance, and this cause follows without change. A 156x line larger than the model can
-make within the bound is reported at the bound, "beyond the stated range", the rest unexplained
-(extension.py). Unit size 0.1.
-Virtual bench: amplitude 0.2-0.5, any phase.
+Mechanism: the elastic housing (fem.components.housing: the pins' seat compliance condensed from
+the housing FE; its kept modes are DOFs of the lumped model, dynamics.couplings.housing) is softer
+at pin k (angle theta_k) by an added seat compliance
+    c_k = sum_m A_m (1 + cos(m theta_k - phi_m)),   (c_m, s_m) = A_m (cos phi_m, sin phi_m):
+the ring thinner or less supported in m places (between ribs, bolt bosses or mounting pads) and
+as the FE has it in between; one-sided, never stiffer than the housing FE. Each softened seat is a
+local housing mode (a load on pin k moves its own seat, in any direction of the ring's plane),
+condensed exactly into that pin's contact (dynamics.couplings.housing.SeatCompliance: in series
+with the pin law, no DOF added). A linear spring: the lines it makes grow with torque as the
+housing's own compliance does, none at zero torque.
+Parameters (c_m, s_m) [um/kN] per harmonic m in `harmonics`.
+Signature (the model, tests/support.py RV-40E stand-in, per 1 um/kN; isotropic seat modes as
+DOFs gave the same): m = 4: 156x 0.016, 0.061, 0.083 arcsec at 3, 30, 60 % rated; m = 2: 78x
+0.37 arcsec at 60 %; the mean (the pattern's average softening A_m: 1.2 arcsec at 60 %) is even in
+the pattern's phase and size (`dc_even`, as LobeCause). Odd m cancel between the discs 180 deg
+apart. The atlas (dynamics.signatures.groups) puts each lobe in a group of its own: the same orders
+as pin_ring_pattern (flat or falling with torque), told apart by the growth with torque.
+Bounds: +-10 um/kN per component (a seat up to 2 x 14 um/kN softer at the crest of one lobe).
+ASSUMED: a housing wall down to ~6 mm between supports ~40 mm apart, read as a beam in bending
+under one seat's load (F L^3 / 48 E I with b = 40 mm: ~9 um/kN), bounds what a built housing's
+thin spots add; the housing FE's own seats are stiffer by one to two orders. A line larger than
+the bound can make is reported at the bound, "beyond the stated range", the rest unexplained
+(extension.py): on the real RV-160N records (FE stiffness, 2026-11-27) the 156x line asks for
+m = 4 at ~890 um/kN, held at 10. Limit: the pattern is one-sided, so its mean softening (A_m)
+trades with torsional_stiffness's factor (there 3.11 -> 2.44); a pattern around the FE seat
+(stiffer and softer) needs the FE seat's own compliance as its floor. Unit size 1 um/kN.
+Virtual bench: one lobe, 4-8 um/kN, any phase.
+History: until issue 23b this cause scaled each pin's whole series law (tooth FE, disc body and
+groove: a Hertzian law), which saturates with torque and could not make a line growing with it.
 """
 from __future__ import annotations
 
+import dataclasses as dc
+
+import numpy as np
+
+from dynamics.couplings.housing import SEATS, SeatCompliance, seat_compliance
 from pipeline.diagnosis.causes.base import Evidence, LobeCause
+
+UM_PER_KN = 1e-9          # [m/N] per um/kN
+
+
+def added_seat_compliance_m_per_N(harmonics, p, zp: int) -> np.ndarray:
+    """(zp,) the added compliance of each pin seat [m/N] (module docstring), >= 0."""
+    th = 2 * np.pi * np.arange(zp) / zp
+    p = np.asarray(p, float).reshape(len(harmonics), 2)
+    c = np.zeros(zp)
+    for m, (cm, sm) in zip(harmonics, p):
+        c += np.hypot(cm, sm) + cm * np.cos(m * th) + sm * np.sin(m * th)
+    return np.maximum(c, 0.0) * UM_PER_KN
 
 
 class HousingStiffnessPattern(LobeCause):
     id = "housing_stiffness_pattern"
-    description = "pin support (groove, housing) stiffness varying around the ring in m lobes"
-    signature = "m zc x lines (even m) absent at zero torque, growing with it"
-    unit_size = 0.1
+    description = "housing pin seats softer in m lobes around the ring (a seat compliance of the housing)"
+    signature = "m zc x lines (even m) absent at zero torque, growing with torque"
+    unit_size = 1.0
     harmonics = (2, 4)
-    bound = 0.3
-    param_prefix, param_unit, report_unit = "housing_stiffness", "1", "fraction"
-    errors_field = "pin_stiffness_lobes"
-    draw_range = (0.2, 0.5)
+    bound = 10.0
+    param_prefix, param_unit, report_unit = "housing_seat", "um_per_kN", "um_per_kN"
+    errors_field = ""
+    draw_range = (4.0, 8.0)
+
+    def apply(self, case, stiffness, p):
+        if not np.any(np.asarray(p, float)):
+            return case, stiffness
+        zp = case.cycloid.zp
+        c = seat_compliance(stiffness, zp) + added_seat_compliance_m_per_N(self.harmonics, p, zp)
+        return case, dc.replace(stiffness, parts=dict(stiffness.parts, **{SEATS: SeatCompliance(c)}))
 
     def evidence(self, ev: Evidence) -> str:
-        return (f"{ev.prefix}residual lines at m zc x ({self.lines_text(ev)}) as the model's signature of a pin support "
-                f"stiffness with m lobes (orders {list(ev.summary.orders)[:4]}; none at zero torque, growing "
-                f"with it): the stiffer pins take more of the load as each disc's load zone sweeps the "
-                f"ring. Same orders as pin_ring_pattern (pin positions: flat or falling with torque); "
+        return (f"{ev.prefix}residual lines at m zc x ({self.lines_text(ev)}) as the model's signature of housing "
+                f"pin seats softer in m lobes (orders {list(ev.summary.orders)[:4]}; none at zero torque, growing "
+                f"with it): each disc's load zone sweeps the soft and the stiff seats zc times per output "
+                f"revolution. Same orders as pin_ring_pattern (pin positions: flat or falling with torque); "
                 f"only the torque trend separates them, a ring measured under load would{ev.alternatives}.")
 
 

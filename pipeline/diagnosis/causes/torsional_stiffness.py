@@ -19,6 +19,7 @@ Unit size u = 0.1. Virtual bench: f in [0.4, 0.7] or [1.5, 3.0].
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from pipeline.diagnosis.causes.base import Cause, Evidence, Fitted, Param
@@ -40,8 +41,13 @@ def budget(case, stiffness) -> dict:
 
 
 def located_component(case, stiffness) -> tuple[str, float]:
-    """(component, share) of the largest share of the output compliance at rated torque."""
-    shares = budget(case, stiffness)["compliance_budget"]
+    """(component, share) of the largest share of the output compliance at rated torque, read on
+    the ideal build (the case without its errors): the location is a property of the FE model, so
+    every model the extension fit evaluates scales the same component, and the budget is solved
+    once per stiffness instead of once per iterate's errors (0.6 s each: 8 % of the real records'
+    diagnosis). For a case file without errors (every shipped case) the same as before."""
+    ideal = dataclasses.replace(case, errors=type(case.errors)())
+    shares = budget(ideal, stiffness)["compliance_budget"]
     comp = max(shares, key=shares.get)
     return comp, float(shares[comp])
 
