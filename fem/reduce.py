@@ -60,9 +60,19 @@ def task_context(case, **options) -> dict:
     return dict(options, loads=table_loads_N(case), load_margin=LOAD_MARGIN)
 
 
-def _compute(name: str, case, ctx: dict):
-    """One component's FE or closed form (a task: pure, picklable in and out)."""
-    return by_name(name).compute(case, ctx)
+def _compute(name: str, case, ctx: dict, part=None):
+    """One component's FE or closed form, or one part of it (a task: pure, picklable in and out)."""
+    c = by_name(name)
+    return c.compute(case, ctx) if part is None else c.compute_part(case, ctx, part)
+
+
+def _tasks(case, ctx) -> list:
+    """(cost, name, part) of every task, longest first (the pool takes them in order): a component
+    with `parts` (independent meshes, e.g. the carrier's levels) is one task per part, put together
+    by its `combine`; any other is one task (part None)."""
+    jobs = [(cost, c.NAME, p) for c in REGISTRY
+            for cost, p in (c.parts(case, ctx) if hasattr(c, "parts") else [(c.COST, None)])]
+    return sorted(jobs, key=lambda j: -j[0])
 
 
 NESTED = {"pin_series": PinSeries}   # StiffnessModel fields assembled from several components' "<field>.<key>";
@@ -96,8 +106,13 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
     map_tasks = map_tasks or (lambda func, tasks: [func(*t) for t in tasks])
     ctx = task_context(case, positions_deg=positions_deg, mesh_size_m=mesh_size_m, crank_edge_m=crank_edge_m,
                        crank_mesh=crank_mesh, carrier_levels=carrier_levels, disc_h_profile_m=disc_h_profile_m)
-    names = [c.NAME for c in sorted(REGISTRY, key=lambda c: -c.COST)]   # longest first: the pool takes them in order
-    results = dict(zip(names, map_tasks(_compute, [(n, case, ctx) for n in names])))
+    jobs = _tasks(case, ctx)
+    done: dict = {}
+    for (_, n, p), r in zip(jobs, map_tasks(_compute, [(n, case, ctx, p) for _, n, p in jobs])):
+        done.setdefault(n, []).append((p, r))
+    names = [c.NAME for c in sorted(REGISTRY, key=lambda c: -c.COST)]   # the former task order (stiffness.json's)
+    results = {n: by_name(n).combine(case, ctx, done[n]) if hasattr(by_name(n), "parts") else done[n][0][1]
+               for n in names}
     for c in REGISTRY:
         if hasattr(c, "refine"):
             r = c.refine(case, results)
