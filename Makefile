@@ -170,10 +170,11 @@ $(BUILD)/%/report/index.html: $(CASE_FP) $$(addprefix $(BUILD)/%/,$(STAGES)) \
 
 # the suite on TEST_WORKERS processes (pytest-xdist; default one per core): each worker takes a run
 # of consecutive tests and an idle one steals half of another's rest, so a module's fixtures are made
-# about once; the kernels compile once for all workers (dynamics.kernel_cache)
+# about once; the kernels compile once for all workers (dynamics.kernel_cache); the FE fixtures are
+# computed once per run for all workers (tests.support.computed_once); the 25 slowest tests are listed
 TEST_WORKERS ?= auto
 test: $(STAMP)
-	$(PY) -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist worksteal
+	$(PY) -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist worksteal --durations=25
 
 bench: $(STAMP)
 	$(PY) bench/run_all.py --out $(BUILD)/bench.json

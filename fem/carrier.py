@@ -61,7 +61,9 @@ RICHARDSON_ORDER = 1.0       # the compliance error's order in h (singular edges
 # cone of M8..M12 output bolts at the interface. Measured: 463 / 2198 N m/arcmin (RV-40E / RV-160N)
 # against 465 / 2211 with the whole face held (-0.5 %): the clamp is not where compliance hides.
 BOLT_ANNULUS_WIDTH = 0.3
-DIRECT_MAX_DOFS = 150_000    # sparse LU up to here (measured 63 s at 111k DOFs), two-level PCG beyond
+# sparse LU up to here, two-level PCG beyond: measured CPU seconds (2 busy cores), RV-40E case carrier, 12 loads:
+# 41k DOFs LU 11.4, PCG 10.6 (60 iterations); 119k DOFs LU 73, PCG 39 (56); C agrees to 5e-12 of max |C|
+DIRECT_MAX_DOFS = 60_000
 
 
 def default_edge_length_m(g: CarrierGeometry) -> float:
@@ -531,10 +533,23 @@ def carrier_fe(g: CarrierGeometry, E_Pa: float, nu: float, *, levels=DEFAULT_LEV
     510, 497, 491, 481 N m/arcmin; the compliance is a straight line in h (residuals < 0.5 %) to
     459; this pair gives 465 (+1.3 %), other pairs 450..486. RV-160N, h = 1.6, 1.33, 1.0, 0.8:
     2620, 2546, 2444, 2402, line to 2210; this pair gives 2197 (-0.6 %)."""
+    hc, hf = level_sizes_m(g, levels)
+    coarse, fine = (carrier_compliance(g, E_Pa, nu, edge_length_m=h, **kw) for h in (hc, hf))
+    return richardson(coarse, fine, p)
+
+
+def level_sizes_m(g: CarrierGeometry, levels=DEFAULT_LEVELS) -> tuple[float, float]:
+    """(h_coarse, h_fine) [m] of the default estimate's two meshes (levels in pillar radii)."""
     hc, hf = (q * g.pillar_radius_mm * 1e-3 for q in levels)
     if not hc > hf:
         raise ValueError(f"carrier levels = {levels!r}: give a coarse then a finer size")
-    coarse, fine = (carrier_compliance(g, E_Pa, nu, edge_length_m=h, **kw) for h in (hc, hf))
+    return hc, hf
+
+
+def richardson(coarse: CarrierFE, fine: CarrierFE, p: float = RICHARDSON_ORDER) -> CarrierFE:
+    """carrier_fe's extrapolation of two levels solved apart (the FE stage runs each level as its
+    own task, fem.components.carrier)."""
+    hc, hf = coarse.edge_length_m, fine.edge_length_m
     a = hf ** p / (hc ** p - hf ** p)
     C = fine.compliance_m_per_N + a * (fine.compliance_m_per_N - coarse.compliance_m_per_N)
     rot = fine.plate_rotation_rad_per_N + a * (fine.plate_rotation_rad_per_N - coarse.plate_rotation_rad_per_N)
@@ -580,14 +595,16 @@ def portal_frame_reference(g: CarrierGeometry, E_Pa: float, nu: float) -> dict:
 
 
 def convergence_study(g: CarrierGeometry, E_Pa: float, nu: float, *, sizes_per_pillar_radius=(1.6, 1.33, 1.0),
-                      flange_share: float = 0.5, p_assumed: float | None = RICHARDSON_ORDER, **kw) -> dict:
+                      flange_share: float = 0.5, p_assumed: float | None = RICHARDSON_ORDER, known=(), **kw) -> dict:
     """The output torsional compliance c on three meshes (h = size x pillar radius), the observed
     order (from the three levels; nan outside (0.2, 6) or if not monotone), the Richardson limit
     c_inf = c_3 + (c_3 - c_2) h_3^p / (h_2^p - h_3^p) with p = p_assumed (None: the observed order),
-    each level's relative error and np.polyfit's slope of log error against log h."""
+    each level's relative error and np.polyfit's slope of log error against log h. known: CarrierFE
+    solved beforehand with the same g, E, nu and options (one taken for each level whose h it has)."""
     from scipy.optimize import brentq
     h = np.asarray(sizes_per_pillar_radius, float) * g.pillar_radius_mm * 1e-3
-    runs = [carrier_compliance(g, E_Pa, nu, edge_length_m=float(x), **kw) for x in h]
+    runs = [next((r for r in known if math.isclose(r.edge_length_m, x, rel_tol=1e-12)), None)
+            or carrier_compliance(g, E_Pa, nu, edge_length_m=float(x), **kw) for x in h]
     c = np.array([r.torsional_compliance_rad_per_Nm(flange_share) for r in runs])
     d1, d2 = c[0] - c[1], c[1] - c[2]
     f = lambda q: (h[0] ** q - h[1] ** q) / (h[1] ** q - h[2] ** q) - d1 / d2  # noqa: E731

@@ -63,10 +63,23 @@ def task_context(case, **options) -> dict:
 ASSEMBLY_CHECKS = {crank_path.NAME: crank_path}   # checks of the reduction: prepare (a pool task), check(model)
 
 
-def _compute(name: str, case, ctx: dict):
-    """One component's FE or closed form, or an assembly check's FE part (a task: pure, picklable
-    in and out)."""
-    return ASSEMBLY_CHECKS[name].prepare(case, ctx) if name in ASSEMBLY_CHECKS else by_name(name).compute(case, ctx)
+def _compute(name: str, case, ctx: dict, part=None):
+    """One component's FE or closed form, one part of it, or an assembly check's FE part (a task:
+    pure, picklable in and out)."""
+    if name in ASSEMBLY_CHECKS:
+        return ASSEMBLY_CHECKS[name].prepare(case, ctx)
+    c = by_name(name)
+    return c.compute(case, ctx) if part is None else c.compute_part(case, ctx, part)
+
+
+def _tasks(case, ctx, checks=()) -> list:
+    """(cost, name, part) of every task, longest first (the pool takes them in order): a component
+    with `parts` (independent meshes, e.g. the carrier's levels) is one task per part, put together
+    by its `combine`; any other is one task (part None); each assembly check's `prepare` one task."""
+    jobs = [(cost, c.NAME, p) for c in REGISTRY
+            for cost, p in (c.parts(case, ctx) if hasattr(c, "parts") else [(c.COST, None)])]
+    jobs += [(ASSEMBLY_CHECKS[n].COST, n, None) for n in checks]
+    return sorted(jobs, key=lambda j: -j[0])
 
 
 NESTED = {"pin_series": PinSeries}   # StiffnessModel fields assembled from several components' "<field>.<key>";
@@ -102,9 +115,14 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
     ctx = task_context(case, positions_deg=positions_deg, mesh_size_m=mesh_size_m, crank_edge_m=crank_edge_m,
                        crank_mesh=crank_mesh, carrier_levels=carrier_levels, disc_h_profile_m=disc_h_profile_m)
     checks = ASSEMBLY_CHECKS if assembly_checks else {}
-    names = [c.NAME for c in sorted((*REGISTRY, *checks.values()), key=lambda c: -c.COST)]   # longest first
-    results = dict(zip(names, map_tasks(_compute, [(n, case, ctx) for n in names])))
-    prepared = {n: results.pop(n) for n in checks}
+    jobs = _tasks(case, ctx, checks)
+    done: dict = {}
+    for (_, n, p), r in zip(jobs, map_tasks(_compute, [(n, case, ctx, p) for _, n, p in jobs])):
+        done.setdefault(n, []).append((p, r))
+    prepared = {n: done.pop(n)[0][1] for n in checks}
+    names = [c.NAME for c in sorted(REGISTRY, key=lambda c: -c.COST)]   # the former task order (stiffness.json's)
+    results = {n: by_name(n).combine(case, ctx, done[n]) if hasattr(by_name(n), "parts") else done[n][0][1]
+               for n in names}
     for c in REGISTRY:
         if hasattr(c, "refine"):
             r = c.refine(case, results)

@@ -201,3 +201,28 @@ def model_for_tests(name: str = "rv40e-81", **errors):
     if errors:
         case = case.with_errors(**errors)
     return build_model(case, stiffness_for_tests(case))
+
+
+def computed_once(tmp_path_factory, key: str, make):
+    """make() once per test run, shared by every pytest-xdist worker: the first to ask computes it
+    under a file lock and pickles it under the run's temporary base; the others (and later modules)
+    wait for and load that file (a pickle round trip: the same arrays, bit for bit). For the
+    expensive fixtures (FE results) that a worker-split module or several modules would otherwise
+    compute again. Serial runs share it between modules the same way."""
+    import fcntl
+    import os
+    import pickle
+    base = tmp_path_factory.getbasetemp()
+    root = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base     # the workers' common base
+    path = root / f"computed-once-{key}.pkl"
+    with open(root / f"computed-once-{key}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if path.exists():
+            with open(path, "rb") as f:
+                return pickle.load(f)
+        value = make()
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        with open(tmp, "wb") as f:
+            pickle.dump(value, f, protocol=pickle.HIGHEST_PROTOCOL)
+        os.replace(tmp, path)
+        return value

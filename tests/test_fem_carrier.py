@@ -9,6 +9,7 @@ from fem import carrier as fc
 from geometry.artifacts import InputError
 from geometry.carrier import CarrierGeometry, CarrierGeometryError, carrier_solid
 from geometry.params import load_case
+from tests.support import computed_once
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 E, NU = 206e9, 0.3
@@ -25,9 +26,11 @@ def geom(rv40e):
 
 
 @pytest.fixture(scope="module")
-def coarse(geom):
-    """The RV-40E carrier on the default estimate's coarse mesh (h = 1.6 pillar radii)."""
-    return fc.carrier_compliance(geom, E, NU, edge_length_m=1.6 * geom.pillar_radius_mm * 1e-3)
+def coarse(geom, tmp_path_factory):
+    """The RV-40E carrier on the default estimate's coarse mesh (h = 1.6 pillar radii), solved once
+    per test run (tests.support.computed_once: the workers of a split module share it)."""
+    return computed_once(tmp_path_factory, "carrier-rv40e-coarse", lambda: fc.carrier_compliance(
+        geom, E, NU, edge_length_m=1.6 * geom.pillar_radius_mm * 1e-3))
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -200,11 +203,12 @@ def test_with_rigid_plates_the_end_plate_turns_as_the_portal_frame_of_timoshenko
 
 
 @pytest.mark.slow
-def test_the_default_estimate_converges_linearly_in_h_to_within_its_stated_error(geom):
+def test_the_default_estimate_converges_linearly_in_h_to_within_its_stated_error(geom, coarse):
     """Three levels h = 1.6, 1.33, 1.0 pillar radii. Singular edges (rigid-ring ends, re-entrant
     pillar roots) make the compliance error ~ h (fem.carrier.carrier_fe: six levels down to 600k
     DOFs were measured once; too slow for a test)."""
-    s = fc.convergence_study(geom, E, NU, sizes_per_pillar_radius=(1.6, 1.33, 1.0), p_assumed=1.0)
+    s = fc.convergence_study(geom, E, NU, sizes_per_pillar_radius=(1.6, 1.33, 1.0), p_assumed=1.0, known=[coarse])
+    assert s["compliance_rad_per_Nm"][0] == coarse.torsional_compliance_rad_per_Nm()   # the 1.6 level: the fixture
     c = s["compliance_rad_per_Nm"]
     # measured 542, 526, 510 N m/arcmin (39k, 56k, 88k DOFs): monotone, more compliant as h shrinks
     assert np.all(np.diff(c) > 0)

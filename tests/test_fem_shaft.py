@@ -6,6 +6,7 @@ import pytest
 
 from fem import stiffness
 from fem.shaft import plain_shaft_check
+from tests.support import computed_once
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 
@@ -20,12 +21,14 @@ def test_plain_shaft_bends_and_twists_within_3_percent_of_beam_theory():
 
 
 @pytest.fixture(scope="module")
-def coarse_run():
+def coarse_run(tmp_path_factory):
+    """The whole FE reduction on coarse meshes, once per test run (tests.support.computed_once)."""
     from fem.reduce import build_stiffness
     from geometry.params import load_case
     case = load_case(CASES / "rv40e-105.toml")
-    return build_stiffness(case, positions_deg=[45.0, 90.0], mesh_size_m=2e-6, crank_edge_m=6e-3,
-                           carrier_levels=(2.0, 1.6), disc_h_profile_m=1.5e-3)
+    return computed_once(tmp_path_factory, "build-stiffness-rv40e-105-coarse", lambda: build_stiffness(
+        case, positions_deg=[45.0, 90.0], mesh_size_m=2e-6, crank_edge_m=6e-3, carrier_levels=(2.0, 1.6),
+        disc_h_profile_m=1.5e-3))
 
 
 @pytest.mark.slow

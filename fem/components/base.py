@@ -8,6 +8,10 @@ A component module has
   compute(case, ctx) -> Result
              its FE or closed form on the case's stated geometry (a pure task: picklable in and out,
              so `--workers`/Dask run the components in parallel); ctx: `fem.reduce.task_context`;
+  parts(case, ctx) -> [(cost, part)], compute_part(case, ctx, part), combine(case, ctx, [(part, out)]) -> Result
+             (optional) a compute made of independent pieces (the carrier's two meshes): the stage
+             runs each part as its own task and `combine` makes the Result; `compute` stays the
+             whole in one process;
   refine(case, results) -> Result | None   (optional)
              a step that needs other components' results (run in the stage's process afterwards);
   stiffen(model, factor) -> StiffnessModel

@@ -20,11 +20,12 @@ from __future__ import annotations
 
 import dataclasses as dc
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
 
-from fem.components.base import Result, timed
+from fem.components.base import Result
 
 NAME = "joints"
 COUPLING = "support"
@@ -105,12 +106,25 @@ def seat_compliance_m_per_N(case, band: str = "mid") -> dict:
             "cup_fit_pressure_Pa": p_cup, "cone_fit_pressure_Pa": p_cone, "source": cup.source + "; " + ring.source}
 
 
-@timed
-def compute(case, ctx) -> Result:
+def parts(case, ctx) -> list:
+    """(cost, part) of the FE stage's tasks: the jointed carrier's two levels (fem.components.carrier)."""
+    from fem.components import carrier
+    return carrier.parts(case, ctx)
+
+
+def compute_part(case, ctx, part: int):
+    """One level of the carrier with its joint layers (a task: pure, picklable)."""
+    from fem.components import carrier
+    return carrier.solve_level(case, ctx, part, joints=carrier_layers(case)[0])
+
+
+def combine(case, ctx, done: list) -> Result:
+    """The component's Result from its parts' outputs [(level, CarrierFE)], the seats' closed forms."""
     from fem import joints
     from fem.components import carrier
-    layers, info = carrier_layers(case)
-    car = carrier.fe_entry(case, ctx.get("carrier_levels"), joints=layers)
+    t0 = time.perf_counter()
+    _, info = carrier_layers(case)
+    car = carrier.fe_entry(case, dict(done))
     seat = seat_compliance_m_per_N(case)
     law = joints.contact_law(case.joints.face_roughness_Ra_um)
     factors = tuple(joints.contact_law(case.joints.face_roughness_Ra_um, b).c_SI / law.c_SI for b in ("low", "high"))
@@ -120,7 +134,13 @@ def compute(case, ctx) -> Result:
     return Result(NAME, {"parts.joints": e},
                   {NAME: f"{joints.LAW_SOURCE}; carrier: thin layers (fem.joint_layers) at the pillar joint and the "
                          f"mounting face under the VDI 2230 preloads; seats: {seat['source']}"},
-                  {NAME: check})
+                  {NAME: check}, seconds=time.perf_counter() - t0 + sum(fe.mesh_seconds + fe.solve_seconds
+                                                                          for _, fe in done))
+
+
+def compute(case, ctx) -> Result:
+    """Every part in this process (fem.reduce runs the parts as tasks instead)."""
+    return combine(case, ctx, [(p, compute_part(case, ctx, p)) for _, p in parts(case, ctx)])
 
 
 def refine(case, results) -> Result:
