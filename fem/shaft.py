@@ -57,10 +57,10 @@ def _polar_moment(mesh, facets, elem) -> float:
 
 def p2_stiffness(mesh3: Mesh3D, E: float, nu: float):
     """(vector P2 basis, K): the stiffness assembled by one einsum per chunk of tets
-    (fem.carrier.elasticity_matrix: skfem's generic form, 900 basis pairs one by one, took ~40 % of
+    (fem.sparse_fe.elasticity_matrix: skfem's generic form, 900 basis pairs one by one, took ~40 % of
     the crankshaft problems), the same matrix to round-off: both quadratures are exact on affine P2."""
     from skfem import Basis, ElementTetP2, ElementVector, MeshTet
-    from fem.carrier import elasticity_matrix
+    from fem.sparse_fe import elasticity_matrix
     m = MeshTet(np.ascontiguousarray(mesh3.points.T), np.ascontiguousarray(mesh3.tetrahedra.T))
     basis = Basis(m, ElementVector(ElementTetP2()), intorder=2)
     return basis, elasticity_matrix(m, ElementTetP2(), basis, E, nu)
@@ -86,9 +86,9 @@ def _p1_coarse_space(basis, free: np.ndarray) -> sp.csr_matrix:
 
 def held_solve(basis, K: sp.spmatrix, fixed: np.ndarray, F: np.ndarray) -> np.ndarray:
     """K u = F with u = 0 on `fixed` (K SPD on the rest), P2 basis: conjugate gradients with the
-    two-level P1 preconditioner of fem.carrier.two_level_pcg to PCG_RTOL (measured on the RV-40E
+    two-level P1 preconditioner of fem.sparse_fe.two_level_pcg to PCG_RTOL (measured on the RV-40E
     crankshaft, 46k DOFs: 40-50 iterations, 5.5x faster than its sparse LU, 8e-13 from it)."""
-    from fem.carrier import two_level_pcg
+    from fem.sparse_fe import two_level_pcg
     free = np.setdiff1d(np.arange(K.shape[0]), fixed)
     U = np.zeros((K.shape[0],) + np.shape(F)[1:])
     Ff = np.asarray(F, float)[free]

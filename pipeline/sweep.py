@@ -126,7 +126,15 @@ def _stop(pool: ProcessPoolExecutor) -> None:
     for p in procs:
         if p.is_alive():
             p.terminate()
-    for p in procs:
+    # once the manager thread has exited nothing can start another worker: read its table a last time
+    manager = getattr(pool, "_executor_manager_thread", None)
+    if manager is not None:
+        manager.join(timeout=10)
+    late = [p for p in list(table.values()) if p not in procs]
+    for p in late:
+        if p.is_alive():
+            p.terminate()
+    for p in procs + late:
         p.join(timeout=10)
 
 
