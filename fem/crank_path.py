@@ -70,11 +70,10 @@ def crank_superelement(case, mesh3, E_Pa: float, nu: float) -> dict:
     crank frame) and the two eccentrics' lateral loads (fem.crank_tilt labels F1x F1y F2x F2y):
     K_ring (12, 12) with the crank's six rigid modes in its null space, G (4, 12) and H (4, 4) with
     ring loads K_ring q + G^T f = bearing forces and eccentric displacements g = H f - G q."""
-    from skfem import MeshTet
     from geometry.solids import crankshaft_layout
     lay = crankshaft_layout(case)
     basis, K = shaft.p2_stiffness(mesh3, E_Pa, nu)
-    msk = basis.mesh if isinstance(basis.mesh, MeshTet) else MeshTet(mesh3.points.T, mesh3.tetrahedra.T)
+    msk = basis.mesh
     h = float(np.median(np.linalg.norm(mesh3.points[mesh3.tetrahedra[:, 0]] - mesh3.points[mesh3.tetrahedra[:, 1]], axis=1)))
     comp = fe_carrier._dof_components(basis)
     rj = lay.journal_radius_mm * 1e-3
@@ -138,7 +137,7 @@ def _ring_rows(P: np.ndarray, N: np.ndarray, centre: np.ndarray) -> np.ndarray:
 class AssembledCrankPath:
     """The nonlinear system q -> R(q) = K q + g_ext + sum_k Q_k(B_k q + d0) B_k^T (module doc)."""
 
-    def __init__(self, case, crank: dict, C6: np.ndarray, g, setup: tapered_roller.PairSetup):
+    def __init__(self, crank: dict, C6: np.ndarray, g, setup: tapered_roller.PairSetup):
         nc = g.crank_count
         self.nc, self.setup = nc, setup
         span = setup.spacing_m
@@ -280,7 +279,7 @@ def check(case, model, prepared: dict) -> dict:
     crank, g, C6, h = (prepared[k] for k in ("crank", "geometry", "carrier_rings", "carrier_edge_length_m"))
     nc = g.crank_count
     setup = tapered_roller.case_support_setup(case)
-    asm = AssembledCrankPath(case, crank, C6, g, setup)
+    asm = AssembledCrankPath(crank, C6, g, setup)
     d0, pre = asm.preloaded_d0()
     torque = case.rated_torque_Nm
     f_unit = crank_tilt.crank_forces_per_torque(case)
@@ -295,9 +294,7 @@ def check(case, model, prepared: dict) -> dict:
     phi_l = float(f_unit.ravel() @ (u_l + needle.ravel()))
     phi_fe_path, phi_l_path = float(f_unit.ravel() @ u_fe.ravel()), float(f_unit.ravel() @ u_l)
     # equilibrium: the bearings pass the eccentric forces to the carrier (force sum, carrier frame)
-    dq = asm.B @ q + d0
-    Qn = asm.cs * np.maximum(dq, 0.0) ** tapered_roller.EXP
-    on_cone = -(asm.B.T @ Qn)
+    on_cone = -(asm.B.T @ Q)
     force_sum = sum(on_cone[cd[[0, 1, 6, 7]]].reshape(2, 2).sum(0) for cd in asm.crank_dofs)
     applied = np.array([f[:, 0].sum() + f[:, 2].sum(), f[:, 1].sum() + f[:, 3].sum()])
     eq = float(np.linalg.norm(force_sum + applied) / max(np.linalg.norm(f), 1.0))

@@ -39,7 +39,7 @@ def rigid_assembly():
     span = setup.spacing_m
     crank = _rigid_crank(span, (0.5 * span - 0.01, 0.5 * span + 0.01))
     C6 = 1e-16 * np.eye(12 * g.crank_count)          # a rigid carrier
-    return case, setup, crank_path.AssembledCrankPath(case, crank, C6, g, setup)
+    return case, setup, crank_path.AssembledCrankPath(crank, C6, g, setup)
 
 
 def test_rigid_limit_reproduces_the_preloaded_pair_of_fem_tapered_roller(rigid_assembly):
@@ -71,5 +71,5 @@ def test_seats_that_do_not_face_the_journals_are_an_input_error(rigid_assembly):
     case, setup, asm = rigid_assembly
     g = fe_carrier.case_geometry(case)
     with pytest.raises(InputError, match="seats"):
-        crank_path.AssembledCrankPath(case, asm.crank, 1e-16 * np.eye(12 * g.crank_count),
+        crank_path.AssembledCrankPath(asm.crank, 1e-16 * np.eye(12 * g.crank_count),
                                       g, dc.replace(setup, spacing_m=setup.spacing_m * 1.5))
