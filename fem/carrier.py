@@ -45,7 +45,7 @@ import scipy.sparse as sp
 
 from fem import hertz
 from fem.joint_layers import JointLayers, joint_layer_tets, layer_material
-from fem.mesh import Mesh3D, MeshError, tet_mesh_from_solid, triangulate
+from fem.mesh import Mesh3D, MeshError, cylinder_band_facets, tet_mesh_from_solid, triangulate
 from fem.sparse_fe import elasticity_matrix, node_ordered_lu_solve, two_level_pcg  # noqa: F401 (fem.carrier.* kept)
 from geometry.carrier import CarrierGeometry
 
@@ -208,13 +208,9 @@ def _p1_coarse_space(basis, mesh_sk, T: sp.csr_matrix, keep: np.ndarray, n_rings
 def seat_facets(msk, g: CarrierGeometry, h: float, crank: int, seat_z_mm: float) -> np.ndarray:
     """Boundary facets of one rigid ring: every vertex on crank's seat bore (equal-area polygons put
     vertices up to 1.3 % outside r; tetwild's envelope is h / 20) and inside the bearing band."""
-    bf = msk.boundary_facets()
-    x = msk.p[:, msk.facets[:, bf]]                     # (3, 3 vertices, n facets)
     cx, cy = (v * 1e-3 for v in g.crank_xy_mm(crank))
-    rs, half = g.seat_bore_radius_mm * 1e-3, g.bearing_width_mm * 0.5e-3
-    ok = (np.abs(np.hypot(x[0] - cx, x[1] - cy) - rs) < max(0.03 * rs, 0.06 * h)) \
-        & (np.abs(x[2] - seat_z_mm * 1e-3) < half + 1e-3 * h)
-    return bf[ok.all(axis=0)]
+    rs, half, zc = g.seat_bore_radius_mm * 1e-3, g.bearing_width_mm * 0.5e-3, seat_z_mm * 1e-3
+    return cylinder_band_facets(msk, cx, cy, rs, zc - half, zc + half, max(0.03 * rs, 0.06 * h), 1e-3 * h)
 
 
 def _dof_components(basis) -> np.ndarray:

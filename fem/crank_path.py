@@ -44,6 +44,7 @@ import scipy.sparse as sp
 
 from fem import carrier as fe_carrier
 from fem import crank_tilt, shaft, tapered_roller
+from fem.mesh import cylinder_band_facets
 from fem.sparse_fe import node_ordered_lu_solve
 from fem.stiffness import seat_transfer
 from geometry.artifacts import InputError
@@ -54,11 +55,8 @@ TOLERANCE = 0.10                               # the issue's: output rotation wi
 
 def _journal_ring_dofs(basis, mesh_sk, radius_m: float, z0_m: float, z1_m: float, h: float) -> np.ndarray:
     """DOFs of the boundary facets whose vertices all lie on the journal cylinder within [z0, z1]."""
-    bf = mesh_sk.boundary_facets()
-    x = mesh_sk.p[:, mesh_sk.facets[:, bf]]
-    ok = (np.abs(np.hypot(x[0], x[1]) - radius_m) < max(0.03 * radius_m, 0.05 * h)) \
-        & (x[2] > z0_m - 0.02 * h) & (x[2] < z1_m + 0.02 * h)
-    d = basis.get_dofs(bf[ok.all(axis=0)]).all()
+    facets = cylinder_band_facets(mesh_sk, 0.0, 0.0, radius_m, z0_m, z1_m, max(0.03 * radius_m, 0.05 * h), 0.02 * h)
+    d = basis.get_dofs(facets).all()
     if len(d) < 9:
         raise InputError(f"crankshaft journal z = {z0_m * 1e3:g}..{z1_m * 1e3:g} mm: no meshed surface on "
                          f"radius {radius_m * 1e3:g} mm (mesh stage's crankshaft mesh)")

@@ -303,6 +303,17 @@ def tet_mesh_from_solid(solid, edge_length_m: float, *, tolerance_m: float | Non
     return Mesh3D(p[used], remap[t])
 
 
+def cylinder_band_facets(msk, cx: float, cy: float, radius: float, z0: float, z1: float,
+                         radial_tol: float, z_tol: float) -> np.ndarray:
+    """Boundary facets of a skfem tet mesh whose vertices all lie on the cylinder of `radius` about
+    (cx, cy) (within radial_tol) and inside z0 - z_tol <= z <= z1 + z_tol: a bore or journal band
+    (a rigid ring's surface). Metres."""
+    bf = msk.boundary_facets()
+    x = msk.p[:, msk.facets[:, bf]]                     # (3, 3 vertices, n facets)
+    ok = (np.abs(np.hypot(x[0] - cx, x[1] - cy) - radius) < radial_tol) & (x[2] > z0 - z_tol) & (x[2] < z1 + z_tol)
+    return bf[ok.all(axis=0)]
+
+
 def write_vtu(path: str | Path, points: np.ndarray, cells: np.ndarray,
               point_data: dict | None = None, cell_data: dict | None = None) -> None:
     """Write triangles/tetrahedra (meshio) atomically; 2D points get z = 0 (ParaView-ready)."""
