@@ -181,21 +181,27 @@ def _from_above(model, th, T, qk, w):
     return q, total, status
 
 
-def static_q(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0: np.ndarray | None,
-            flank: int = +1, w=None) -> tuple[np.ndarray, int]:
+def static_q(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0,
+            flank: int = +1, w=None, period_shift: np.ndarray | None = None,
+            seed: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """State vector q of the static equilibrium at input_rad [rad] under the record torque, robust by
-    construction (see `solve_static`; q0 a warm start, flank the zero-load flank): returns (q, iterations)."""
+    construction (see `solve_static`; flank the zero-load flank): returns (q, iterations).
+    q0: a warm start (the caller's guess, e.g. the last solution; a callable is called only when
+    reached), or None. seed: a nearby model's equilibrium at this angle, tried first (`static_path`). period_shift: `turn_shift(model)` when the caller has it."""
     w = model.work() if w is None else w
     th, turns = _reduce(model, input_rad)
-    shift = turns * turn_shift(model)
+    shift = turns * (turn_shift(model) if period_shift is None else period_shift)
     T = float(record_torque_Nm)
     floor = ZERO_LOAD_FRACTION * model.case.rated_torque_Nm
     if abs(T) < floor:                   # zero load: vanishing preload on the given flank
         T = flank * floor
     flank = 1 if T > 0 else -1
     total = 0
-    if q0 is not None:                   # warm start (the caller's guess, e.g. the last solution)
-        q, it, status = _newton(model, th, T, np.asarray(q0, float) - shift, w)
+    for g in (seed, q0):                 # warm starts
+        g = g() if callable(g) else g
+        if g is None:
+            continue
+        q, it, status = _newton(model, th, T, np.asarray(g, float) - shift, w)
         total += it
         if status == 0 and _on_branch(model, th, q):
             return q + shift, total
@@ -270,26 +276,51 @@ def quasi_static(model: ReducerModel, input_angle_deg, torque_Nm, direction: int
     if not (np.all(np.isfinite(th)) and np.all(np.isfinite(T))):
         raise DynamicsError("quasi_static: input angles and torques must be finite")
     n = len(th)
-    carrier = np.empty(n)
     pf = np.zeros((n, model.n_disc, model.case.cycloid.zp))
     w = model.work()
-    q, nom_prev = None, None
-    for i in range(n):
-        # warm start: rigid-body advance of the last solution (the solver falls back to the
-        # touching kinematic pose and torque continuation when the step is too large for it)
-        nom = nominal_q(model, th[i])
-        guess = None if q is None else q + nom - nom_prev
-        nom_prev = nom
-        q, _ = static_q(model, th[i], T[i], guess, direction, w)
-        carrier[i] = q[model.i_out]
-        if pin_forces:
+    on_each = None
+    if pin_forces:
+        def on_each(i, q):
             evaluate(model, q, th[i], w=w)
             pf[i] = model.contacts(w.force)
+    carrier, _ = static_path(model, th, T, direction, w=w, on_each=on_each)
     if t_s is None:
         speed = 6.0 * model.case.operation.input_speed_rpm
         t_s = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(np.rad2deg(th)))) / speed])
     return te_result(model, np.asarray(t_s, float), th, carrier, T, (pf > 0).sum(axis=2),
                      pf if pin_forces else None, {"solver": "quasi_static", "direction": direction})
+
+
+def static_path(model: ReducerModel, th_rad: np.ndarray, T: np.ndarray, direction: int = +1,
+                seeds: np.ndarray | None = None, w=None, on_each=None) -> tuple[np.ndarray, np.ndarray]:
+    """The static equilibria along input angles th_rad [rad] under applied torques T (as solved by
+    `static_q`, each warm-started): (carrier angles [rad], states Q (n, n_dof)). on_each(i, q) is
+    called after each point's solve.
+    Warm starts: seeds[i] first when given (the equilibria of a nearby model at the same angles,
+    e.g. the unperturbed model of a fit: 2.2 instead of 4 Newton iterations a point, measured on the
+    RV-40E stand-in), then the rigid-body advance of the last solution (the solver falls back to the
+    touching kinematic pose and torque continuation when neither converges on the branch). The
+    result is the same equilibrium to the Newton tolerance STATIC_TOL_N whichever start succeeds."""
+    n = len(th_rad)
+    if seeds is not None and np.shape(seeds) != (n, model.n_dof):
+        seeds = None                     # another layout's states: no use as a start
+    w = model.work() if w is None else w
+    shift = turn_shift(model)
+    Q = np.empty((n, model.n_dof))
+    q, nom_prev = None, None
+    for i in range(n):
+        guess = None
+        if seeds is None or i == 0:      # the rigid-body advance (not needed while seeds serve)
+            nom = nominal_q(model, th_rad[i])
+            guess = None if q is None else q + nom - nom_prev
+            nom_prev = nom
+        elif q is not None:
+            guess = (lambda i=i, q=q: q + nominal_q(model, th_rad[i]) - nominal_q(model, th_rad[i - 1]))
+        q, _ = static_q(model, th_rad[i], T[i], guess, direction, w, shift, None if seeds is None else seeds[i])
+        Q[i] = q
+        if on_each is not None:
+            on_each(i, q)
+    return Q[:, model.i_out].copy(), Q
 
 
 def te_result(model, t, th_in, carrier, T, teeth, pf, meta) -> TEResult:

@@ -82,8 +82,8 @@ def test_a_reading_error_reuses_the_solved_carrier(monkeypatch):
     import dynamics.statics as dm
     stiff = stiffness_for_tests(CASE)
     calls = []
-    real = dm.quasi_static
-    monkeypatch.setattr(dm, "quasi_static", lambda *a, **k: calls.append(1) or real(*a, **k))
+    real = dm.static_path
+    monkeypatch.setattr(dm, "static_path", lambda *a, **k: calls.append(1) or real(*a, **k))
     sim._CARRIERS.clear()
     grid = sim.periodic_grid_deg(CASE, 64, 1)
     base = sim.quasi_static_te(CASE, stiff, grid, 200.0, 1)
@@ -141,3 +141,29 @@ def test_a_coaxiality_beyond_its_range_is_reported_at_its_bound():
 
 def test_explains_share_threshold_is_stated():
     assert 0.0 < EXPLAINS_SHARE < 1.0
+
+
+def test_a_seeded_path_is_the_same_equilibrium_and_foreign_seeds_are_ignored():
+    """statics.static_path with seeds (a nearby model's states at the same angles, the fit's warm
+    start) lands on the unseeded equilibria to the Newton tolerance (1e-6 arcsec here); seeds of
+    another shape are not used."""
+    from support import stiffness_for_tests
+    import dynamics.statics as dm
+    model = sim.model_for(CASE, stiffness_for_tests(CASE))
+    th = np.radians(sim.periodic_grid_deg(CASE, 64, 1))
+    T = np.full(th.shape, 0.3 * CASE.rated_torque_Nm)
+    _, Q = dm.static_path(model, th, T, 1)
+    cold, _ = dm.static_path(model, th, 1.05 * T, 1)
+    seeded, _ = dm.static_path(model, th, 1.05 * T, 1, seeds=Q)
+    foreign, Qf = dm.static_path(model, th, 1.05 * T, 1, seeds=Q[:, :-1])
+    arcsec = 206264.806
+    assert np.max(np.abs(seeded - cold)) * arcsec < 1e-6
+    assert np.array_equal(foreign, cold)
+    assert np.array_equal(Qf[:, model.i_out], foreign)
+
+
+def test_the_stiffness_digest_is_by_content_and_remembered_per_object():
+    from support import stiffness_for_tests
+    a, b = stiffness_for_tests(CASE), stiffness_for_tests(CASE)
+    assert a is not b and sim.stiffness_digest(a) == sim.stiffness_digest(b) == sim.stiffness_digest(a)
+    assert sim._DIGESTS[id(a)][0] is a

@@ -35,7 +35,7 @@ from pipeline.diagnosis.orders import spectrum_of
 from pipeline.diagnosis.signatures import SignatureSummary, signature_columns, summarise
 from pipeline.diagnosis.significance import Line, noise_floor_arcsec, test_lines
 from pipeline.diagnosis.simulate import (TEModel, default_points_per_rev, max_order as order_limit, process_pool,
-                                         quasi_static_te, simulate_records)
+                                         quasi_static_te, seeding, simulate_records)
 from pipeline.diagnosis.unexplained import torque_sign_notes, unexplained
 from pipeline.diagnosis.zeros import group_records, offset_columns, remove_offsets, rms
 
@@ -126,8 +126,10 @@ def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = qu
     `workers`: local processes solving the records' grids (default: the machine's cores; 1 = none)."""
     pool = process_pool(workers) if getattr(te_model, "__wrapped__", te_model) is quasi_static_te else None
     try:
-        return _diagnose(case, stiffness, records, te_model, pool, points_per_rev=points_per_rev, p_enter=p_enter,
-                         p_line=p_line, max_nfev=max_nfev, holdout=holdout, holdout_records=holdout_records)
+        with seeding():
+            return _diagnose(case, stiffness, records, te_model, pool, points_per_rev=points_per_rev,
+                             p_enter=p_enter, p_line=p_line, max_nfev=max_nfev, holdout=holdout,
+                             holdout_records=holdout_records)
     finally:
         if pool is not None:
             pool.shutdown()
