@@ -29,6 +29,7 @@ _ADDRESS = re.compile(r"^((tcp|tls|ucx|ws|wss)://)?(\[[0-9A-Fa-f:.]+\]|[^\s/:\[\
 
 
 ALLOWED_FAILURES = 3          # pool breaks (a worker died) tolerated per sweep: Dask's default
+EXIT_GRACE_S = 10.0          # a finished pool's workers leave within this on its exit message, else are ended
 NO_WORKER_TIMEOUT_S = 120.0   # a Dask cluster without a worker this long ends the sweep
 _POLL_S = 1.0
 
@@ -112,30 +113,45 @@ def _run_local(func, tasks, workers, progress) -> list:
         except BaseException:
             _stop(pool)
             raise
-        pool.shutdown()
+        _stop(pool, graceful=True)
         return out
 
 
-def _stop(pool: ProcessPoolExecutor) -> None:
-    """Cancel what has not started and terminate the workers (running tasks die mid-way)."""
+def _stop(pool: ProcessPoolExecutor, graceful: bool = False) -> None:
+    """Cancel what has not started and terminate the workers (running tasks die mid-way).
+    graceful (every result is in): the workers get EXIT_GRACE_S to leave on the pool's exit
+    message first. Every worker is gone on return: one that outlives SIGTERM is killed. (A worker
+    killed while it waits on the pool's call queue holds that queue's lock for ever, and its
+    sibling then never reads the exit message: `shutdown(wait=True)` would hang; seen once in a
+    full test run.)"""
     table = getattr(pool, "_processes", None) or {}   # pid -> process; 3.14: pool.terminate_workers()
     procs = list(table.values())
     pool.shutdown(wait=False, cancel_futures=True)    # drops pool._processes, not the manager thread's table
     # the manager thread may still start a worker it had queued (seen under load): read its table again
     procs += [p for p in list(table.values()) if p not in procs]
-    for p in procs:
-        if p.is_alive():
-            p.terminate()
+    if graceful:
+        deadline = time.monotonic() + EXIT_GRACE_S
+        for p in procs:
+            p.join(timeout=max(0.0, deadline - time.monotonic()))
+    _end(procs)
     # once the manager thread has exited nothing can start another worker: read its table a last time
     manager = getattr(pool, "_executor_manager_thread", None)
     if manager is not None:
         manager.join(timeout=10)
-    late = [p for p in list(table.values()) if p not in procs]
-    for p in late:
+    _end([p for p in list(table.values()) if p not in procs])
+
+
+def _end(procs) -> None:
+    """Terminate the live processes of procs, then kill any that outlive it (a SIGTERM handler a
+    just-forked worker inherited before its initializer ran may not exit)."""
+    for p in procs:
         if p.is_alive():
             p.terminate()
-    for p in procs + late:
-        p.join(timeout=10)
+    for p in procs:
+        p.join(timeout=5)
+        if p.is_alive():
+            p.kill()
+            p.join(timeout=5)
 
 
 def _run_dask(func, tasks, scheduler: str, progress) -> list:

@@ -106,3 +106,28 @@ def test_a_scheduler_address_of_the_usual_forms_is_accepted(address):
 def test_a_malformed_scheduler_address_is_refused_with_the_allowed_form(address):
     with pytest.raises(SchedulerError, match="tcp://HOST:PORT"):
         check_scheduler(address)
+
+
+def _deaf_to_sigterm(seconds):
+    import signal
+    import time
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    time.sleep(seconds)
+
+
+def test_a_worker_that_outlives_sigterm_is_killed_and_a_finished_pool_leaves_no_worker():
+    """sweep._end: SIGTERM, then SIGKILL for a process still alive 5 s later (a worker that
+    inherited a SIGTERM handler, or one blocked for ever on a dead sibling's queue lock); a pool
+    whose every result is in is ended the same way after its grace (no hang at shutdown)."""
+    import multiprocessing
+    import time
+    from pipeline.sweep import _end
+    others = set(multiprocessing.active_children())
+    p = multiprocessing.get_context("fork").Process(target=_deaf_to_sigterm, args=(60.0,))
+    p.start()
+    time.sleep(0.5)
+    t0 = time.perf_counter()
+    _end([p])
+    assert not p.is_alive() and p.exitcode == -9 and time.perf_counter() - t0 < 15.0
+    assert run_tasks(_nap, [(0.01,)] * 4, workers=2) == [0.01] * 4
+    assert set(multiprocessing.active_children()) <= others
