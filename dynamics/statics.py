@@ -187,7 +187,8 @@ def static_q(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0,
     """State vector q of the static equilibrium at input_rad [rad] under the record torque, robust by
     construction (see `solve_static`; flank the zero-load flank): returns (q, iterations).
     q0: a warm start (the caller's guess, e.g. the last solution; a callable is called only when
-    reached), or None. seed: a nearby model's equilibrium at this angle, tried first (`static_path`). period_shift: `turn_shift(model)` when the caller has it."""
+    reached), or None. seed: a nearby model's equilibrium at this angle, tried first
+    (`static_path`). period_shift: `turn_shift(model)` when the caller has it."""
     w = model.work() if w is None else w
     th, turns = _reduce(model, input_rad)
     shift = turns * (turn_shift(model) if period_shift is None else period_shift)
@@ -309,13 +310,13 @@ def static_path(model: ReducerModel, th_rad: np.ndarray, T: np.ndarray, directio
     Q = np.empty((n, model.n_dof))
     q, nom_prev = None, None
     for i in range(n):
-        guess = None
-        if seeds is None or i == 0:      # the rigid-body advance (not needed while seeds serve)
+        if seeds is None:                # the rigid-body advance of the last solution
             nom = nominal_q(model, th_rad[i])
             guess = None if q is None else q + nom - nom_prev
             nom_prev = nom
-        elif q is not None:
-            guess = (lambda i=i, q=q: q + nominal_q(model, th_rad[i]) - nominal_q(model, th_rad[i - 1]))
+        else:                            # the same, made only where the seed fails
+            guess = None if q is None else (
+                lambda i=i, q=q: q + nominal_q(model, th_rad[i]) - nominal_q(model, th_rad[i - 1]))
         q, _ = static_q(model, th_rad[i], T[i], guess, direction, w, shift, None if seeds is None else seeds[i])
         Q[i] = q
         if on_each is not None:
