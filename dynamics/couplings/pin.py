@@ -130,6 +130,14 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     hphi, hdof = p.housing_phi, p.housing_dof
     nh = hdof.shape[0]
     hu = np.zeros((npin, 2))            # each pin seat's displacement with the housing's modes
+    # the pin coupling is the only one that touches the housing rows and columns of K and C: their
+    # blocks are summed here (same contacts, same order: the same bits as summing into K directly)
+    # and added once at the end, no allocation per contact: -8..14 % CPU a time step on rv40e-81 (issue 24)
+    gh = np.empty(nh)                   # the gap's gradient on the housing modes
+    Khh, Chh = np.zeros((nh, nh)), np.zeros((nh, nh))
+    ndisc = dof.shape[0]
+    Kdh, Cdh = np.zeros((ndisc, 3, nh)), np.zeros((ndisc, 3, nh))
+    Khd, Chd = np.zeros((ndisc, nh, 3)), np.zeros((ndisc, nh, 3))
     for k in range(npin):
         for i in range(nh):
             hu[k, 0] += hphi[k, 0, i] * q[hdof[i]]
@@ -214,17 +222,38 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
                             if Ft > 0.0:
                                 C[ii[c1], ii[c2]] += beta * rmp * kt * gg[c1] * gg[c2]
                 continue
-            gv = np.empty(3 + nh)              # the gap's gradient on (disc x, y, rot, housing modes)
-            iv = np.empty(3 + nh, np.int64)
-            gv[0], gv[1], gv[2], iv[0], iv[1], iv[2] = g_x, g_y, g_a, ix, iy, ia
-            for i in range(nh):
-                gv[3 + i] = ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]
-                iv[3 + i] = hdof[i]
-                f[hdof[i]] += Ft * gv[3 + i]
-            if want_k:
-                for c1 in range(3 + nh):
-                    for c2 in range(3 + nh):
-                        K[iv[c1], iv[c2]] += kt * gv[c1] * gv[c2]
-                        if Ft > 0.0:
-                            C[iv[c1], iv[c2]] += beta * rmp * kt * gv[c1] * gv[c2]
+            for i in range(nh):              # the gap's gradient on the housing modes
+                gh[i] = ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]
+                f[hdof[i]] += Ft * gh[i]
+            if want_k:                       # K += kt g g^T over (disc x, y, rot, housing modes)
+                gg, ii = (g_x, g_y, g_a), (ix, iy, ia)
+                damp = Ft > 0.0
+                for c1 in range(3):
+                    for c2 in range(3):
+                        K[ii[c1], ii[c2]] += kt * gg[c1] * gg[c2]
+                        if damp:
+                            C[ii[c1], ii[c2]] += beta * rmp * kt * gg[c1] * gg[c2]
+                    for c2 in range(nh):
+                        Kdh[d, c1, c2] += kt * gg[c1] * gh[c2]
+                        Khd[d, c2, c1] += kt * gh[c2] * gg[c1]
+                        if damp:
+                            Cdh[d, c1, c2] += beta * rmp * kt * gg[c1] * gh[c2]
+                            Chd[d, c2, c1] += beta * rmp * kt * gh[c2] * gg[c1]
+                for c1 in range(nh):
+                    for c2 in range(nh):
+                        Khh[c1, c2] += kt * gh[c1] * gh[c2]
+                        if damp:
+                            Chh[c1, c2] += beta * rmp * kt * gh[c1] * gh[c2]
+    if want_k and nh > 0:
+        for d in range(ndisc):
+            for c1 in range(3):
+                for c2 in range(nh):
+                    K[dof[d, c1], hdof[c2]] += Kdh[d, c1, c2]
+                    K[hdof[c2], dof[d, c1]] += Khd[d, c2, c1]
+                    C[dof[d, c1], hdof[c2]] += Cdh[d, c1, c2]
+                    C[hdof[c2], dof[d, c1]] += Chd[d, c2, c1]
+        for c1 in range(nh):
+            for c2 in range(nh):
+                K[hdof[c1], hdof[c2]] += Khh[c1, c2]
+                C[hdof[c1], hdof[c2]] += Chh[c1, c2]
     return V, tau_in, ok
