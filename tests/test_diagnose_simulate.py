@@ -167,3 +167,18 @@ def test_the_stiffness_digest_is_by_content_and_remembered_per_object():
     a, b = stiffness_for_tests(CASE), stiffness_for_tests(CASE)
     assert a is not b and sim.stiffness_digest(a) == sim.stiffness_digest(b) == sim.stiffness_digest(a)
     assert sim._DIGESTS[id(a)][0] is a
+
+
+def test_seeds_follow_the_last_model_solved_on_a_grid_and_only_inside_a_run():
+    """Inside `seeding()` each grid's seeds are the states of the last model solved there (the fit's
+    next column or step starts from its neighbour); outside it nothing is kept."""
+    key_a, key_b = ("case", "digest A", "grid", 1, None), ("case", "digest B", "grid", 1, None)
+    qa, qb = np.zeros((3, 2)), np.ones((3, 2))
+    sim._seeded(key_a, (np.zeros(3), qa))
+    assert sim._seeds_for(key_a) is None
+    with sim.seeding():
+        sim._seeded(key_a, (np.zeros(3), qa))
+        assert sim._seeds_for(key_b) is qa           # the same grid: another model's states
+        sim._seeded(key_b, (np.zeros(3), qb))
+        assert sim._seeds_for(key_a) is qb
+    assert sim._seeds_for(key_a) is None
