@@ -129,6 +129,25 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
         tries += 1
 
 
+@kernel
+def static_seeded(seeds, shifts, th_in, torque, tol_N, m, w, scale, max_iter, branch_rad, ratio):
+    """`static_solve` from each seed of a path (point i: the state seeds[i] - shifts[i] at input
+    th_in[i] under torque[i] to tol_N[i]), kept where it converges on the seed's branch (the output
+    within branch_rad of input / ratio; dynamics.statics._on_branch): (Q = solution + shifts[i],
+    ok). One call for the whole path: the per-point Python and dispatch cost of the fit's solves
+    (dynamics.statics.static_path) goes; what fails here the caller solves point by point."""
+    npt, n = seeds.shape
+    Q = np.empty((npt, n))
+    ok = np.zeros(npt, np.bool_)
+    io = m.i_out
+    for i in range(npt):
+        q, _, status = static_solve(seeds[i] - shifts[i], th_in[i], torque[i], m, w, scale, max_iter, tol_N[i])
+        if status == 0 and abs(q[io] - th_in[i] / ratio) < branch_rad:
+            Q[i] = q + shifts[i]
+            ok[i] = True
+    return Q, ok
+
+
 @kernel(inline=True)
 def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, loose):
     """One HHT-alpha step of size h; returns (q1, v1, a1, fn1, iterations, ok, V, tau)."""

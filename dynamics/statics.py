@@ -135,15 +135,33 @@ def kinematic_q(model: ReducerModel, input_rad: float, flank: int = +1) -> np.nd
     return _rigid_pose(model, input_rad, centre - flank * sign * (lo if g0 > 0 else hi))
 
 
-def _newton(model, input_rad, T, q0, w, max_iter=100):
-    tol = STATIC_TOL_N * max(1.0, abs(T) / 100)
-    return kn.static_solve(q0.copy(), float(input_rad), float(T), model.arrays, w, model.scale, max_iter, tol)
+NEWTON_MAX_ITER = 100
+
+
+def _tol(T: float) -> float:
+    return STATIC_TOL_N * max(1.0, abs(T) / 100)
+
+
+def _newton(model, input_rad, T, q0, w, max_iter=NEWTON_MAX_ITER):
+    return kn.static_solve(q0.copy(), float(input_rad), float(T), model.arrays, w, model.scale, max_iter, _tol(T))
+
+
+def _branch_rad(model: ReducerModel) -> float:
+    """Newton can land on the next tooth (the profile is periodic: the disc one pin pitch on is also
+    an equilibrium). Windup plus backlash stay far below a quarter pin pitch of output rotation."""
+    return 0.25 * 2 * np.pi / model.case.cycloid.zp
 
 
 def _on_branch(model: ReducerModel, th: float, q: np.ndarray) -> bool:
-    """Newton can land on the next tooth (the profile is periodic: the disc one pin pitch on is also
-    an equilibrium). Windup plus backlash stay far below a quarter pin pitch of output rotation."""
-    return abs(q[model.i_out] - th / model.ratio) < 0.25 * 2 * np.pi / model.case.cycloid.zp
+    return abs(q[model.i_out] - th / model.ratio) < _branch_rad(model)
+
+
+def _applied(model: ReducerModel, record_torque_Nm: float, flank: int) -> float:
+    """The torque solved for: a record torque below ZERO_LOAD_FRACTION x rated is that vanishing
+    preload on `flank` (see `solve_static`)."""
+    T = float(record_torque_Nm)
+    floor = ZERO_LOAD_FRACTION * model.case.rated_torque_Nm
+    return flank * floor if abs(T) < floor else T
 
 
 def _continuation(model, th, T, qk, w):
@@ -192,10 +210,8 @@ def static_q(model: ReducerModel, input_rad: float, record_torque_Nm: float, q0,
     w = model.work() if w is None else w
     th, turns = _reduce(model, input_rad)
     shift = turns * (turn_shift(model) if period_shift is None else period_shift)
-    T = float(record_torque_Nm)
     floor = ZERO_LOAD_FRACTION * model.case.rated_torque_Nm
-    if abs(T) < floor:                   # zero load: vanishing preload on the given flank
-        T = flank * floor
+    T = _applied(model, record_torque_Nm, flank)     # zero load: vanishing preload on the given flank
     flank = 1 if T > 0 else -1
     total = 0
     for g in (seed, q0):                 # warm starts
@@ -301,23 +317,35 @@ def static_path(model: ReducerModel, th_rad: np.ndarray, T: np.ndarray, directio
     e.g. the unperturbed model of a fit: 2.2 instead of 4 Newton iterations a point, measured on the
     RV-40E stand-in), then the rigid-body advance of the last solution (the solver falls back to the
     touching kinematic pose and torque continuation when neither converges on the branch). The
-    result is the same equilibrium to the Newton tolerance STATIC_TOL_N whichever start succeeds."""
+    result is the same equilibrium to the Newton tolerance STATIC_TOL_N whichever start succeeds.
+    The seeds are tried in one kernel call (`kernels.static_seeded`), the points where they fail
+    then solved in order as `static_q` would have after its seed."""
     n = len(th_rad)
     if seeds is not None and np.shape(seeds) != (n, model.n_dof):
         seeds = None                     # another layout's states: no use as a start
     w = model.work() if w is None else w
     shift = turn_shift(model)
     Q = np.empty((n, model.n_dof))
+    done = np.zeros(n, bool)
+    if seeds is not None:                # every seed tried in one kernel call (static_q's first try)
+        red = [_reduce(model, t) for t in th_rad]
+        Ts = np.array([_applied(model, t, direction) for t in T])
+        Qs, done = kn.static_seeded(np.ascontiguousarray(seeds, float), np.array([k * shift for _, k in red]),
+                                    np.array([t for t, _ in red]), Ts, np.array([_tol(t) for t in Ts]),
+                                    model.arrays, w, model.scale, NEWTON_MAX_ITER, _branch_rad(model), model.ratio)
+        Q[done] = Qs[done]
     q, nom_prev = None, None
     for i in range(n):
-        if seeds is None:                # the rigid-body advance of the last solution
+        if done[i]:
+            q = Q[i]
+        elif seeds is None:              # the rigid-body advance of the last solution
             nom = nominal_q(model, th_rad[i])
             guess = None if q is None else q + nom - nom_prev
             nom_prev = nom
-        else:                            # the same, made only where the seed fails
-            guess = None if q is None else (
-                lambda i=i, q=q: q + nominal_q(model, th_rad[i]) - nominal_q(model, th_rad[i - 1]))
-        q, _ = static_q(model, th_rad[i], T[i], guess, direction, w, shift, None if seeds is None else seeds[i])
+            q, _ = static_q(model, th_rad[i], T[i], guess, direction, w, shift)
+        else:                            # the seed failed: the same, made only here
+            guess = None if q is None else q + nominal_q(model, th_rad[i]) - nominal_q(model, th_rad[i - 1])
+            q, _ = static_q(model, th_rad[i], T[i], guess, direction, w, shift)
         Q[i] = q
         if on_each is not None:
             on_each(i, q)
