@@ -148,6 +148,23 @@ def static_seeded(seeds, shifts, th_in, torque, tol_N, m, w, scale, max_iter, br
     return Q, ok
 
 
+@kernel
+def static_advance(Q, i0, nominal, shifts, th_in, torque, tol_N, m, w, scale, max_iter, branch_rad, ratio):
+    """Points i0, i0 + 1, ... of a static path, each from the rigid-body advance of the last
+    solution (Q[i - 1] + nominal[i] - nominal[i - 1], less shifts[i]; as `static_seeded` otherwise),
+    written into Q; stops at the first point that does not converge on its branch and returns its
+    index (len(Q): all done). The caller solves that point its robust way and calls again."""
+    npt = Q.shape[0]
+    io = m.i_out
+    for i in range(i0, npt):
+        guess = Q[i - 1] + nominal[i] - nominal[i - 1]
+        q, _, status = static_solve(guess - shifts[i], th_in[i], torque[i], m, w, scale, max_iter, tol_N[i])
+        if status != 0 or abs(q[io] - th_in[i] / ratio) >= branch_rad:
+            return i
+        Q[i] = q + shifts[i]
+    return npt
+
+
 @kernel(inline=True)
 def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, loose):
     """One HHT-alpha step of size h; returns (q1, v1, a1, fn1, iterations, ok, V, tau)."""

@@ -319,36 +319,39 @@ def static_path(model: ReducerModel, th_rad: np.ndarray, T: np.ndarray, directio
     touching kinematic pose and torque continuation when neither converges on the branch). The
     result is the same equilibrium to the Newton tolerance STATIC_TOL_N whichever start succeeds.
     The seeds are tried in one kernel call (`kernels.static_seeded`), the points where they fail
-    then solved in order as `static_q` would have after its seed."""
+    then solved in order as `static_q` would have after its seed; without seeds the advances run in
+    the kernel (`kernels.static_advance`) and Python takes only the points where one fails. on_each
+    is called once the path is solved."""
     n = len(th_rad)
     if seeds is not None and np.shape(seeds) != (n, model.n_dof):
         seeds = None                     # another layout's states: no use as a start
     w = model.work() if w is None else w
     shift = turn_shift(model)
     Q = np.empty((n, model.n_dof))
-    done = np.zeros(n, bool)
+    red = [_reduce(model, t) for t in th_rad]
+    shifts = np.array([k * shift for _, k in red]).reshape(n, model.n_dof)
+    th_red = np.array([t for t, _ in red])
+    Ts = np.array([_applied(model, t, direction) for t in T])
+    tols = np.array([_tol(t) for t in Ts])
+    args = (model.arrays, w, model.scale, NEWTON_MAX_ITER, _branch_rad(model), model.ratio)
     if seeds is not None:                # every seed tried in one kernel call (static_q's first try)
-        red = [_reduce(model, t) for t in th_rad]
-        Ts = np.array([_applied(model, t, direction) for t in T])
-        Qs, done = kn.static_seeded(np.ascontiguousarray(seeds, float), np.array([k * shift for _, k in red]),
-                                    np.array([t for t, _ in red]), Ts, np.array([_tol(t) for t in Ts]),
-                                    model.arrays, w, model.scale, NEWTON_MAX_ITER, _branch_rad(model), model.ratio)
+        Qs, done = kn.static_seeded(np.ascontiguousarray(seeds, float), shifts, th_red, Ts, tols, *args)
         Q[done] = Qs[done]
-    q, nom_prev = None, None
-    for i in range(n):
-        if done[i]:
+        q = None
+        for i in range(n):
+            if not done[i]:              # the seed failed: the rigid-body advance of the last solution
+                guess = None if q is None else q + nominal_q(model, th_rad[i]) - nominal_q(model, th_rad[i - 1])
+                Q[i], _ = static_q(model, th_rad[i], T[i], guess, direction, w, shift)
             q = Q[i]
-        elif seeds is None:              # the rigid-body advance of the last solution
-            nom = nominal_q(model, th_rad[i])
-            guess = None if q is None else q + nom - nom_prev
-            nom_prev = nom
-            q, _ = static_q(model, th_rad[i], T[i], guess, direction, w, shift)
-        else:                            # the seed failed: the same, made only here
-            guess = None if q is None else q + nominal_q(model, th_rad[i]) - nominal_q(model, th_rad[i - 1])
-            q, _ = static_q(model, th_rad[i], T[i], guess, direction, w, shift)
-        Q[i] = q
-        if on_each is not None:
-            on_each(i, q)
+    else:                                # the rigid-body advance of the last solution, in the kernel
+        nominal = np.array([nominal_q(model, t) for t in th_rad]).reshape(n, model.n_dof)
+        i = 0
+        while i < n:                     # point i: no start (the first) or its advance failed
+            Q[i], _ = static_q(model, th_rad[i], T[i], None, direction, w, shift)
+            i = kn.static_advance(Q, i + 1, nominal, shifts, th_red, Ts, tols, *args)
+    if on_each is not None:
+        for i in range(n):
+            on_each(i, Q[i])
     return Q[:, model.i_out].copy(), Q
 
 
