@@ -312,7 +312,7 @@ def static_path(model: ReducerModel, th_rad: np.ndarray, T: np.ndarray, directio
                 seeds: np.ndarray | None = None, w=None, on_each=None) -> tuple[np.ndarray, np.ndarray]:
     """The static equilibria along input angles th_rad [rad] under applied torques T (as solved by
     `static_q`, each warm-started): (carrier angles [rad], states Q (n, n_dof)). on_each(i, q) is
-    called after each point's solve.
+    called for each point in order once the path is solved.
     Warm starts: seeds[i] first when given (the equilibria of a nearby model at the same angles,
     e.g. the unperturbed model of a fit: 2.2 instead of 4 Newton iterations a point, measured on the
     RV-40E stand-in), then the rigid-body advance of the last solution (the solver falls back to the
@@ -320,8 +320,7 @@ def static_path(model: ReducerModel, th_rad: np.ndarray, T: np.ndarray, directio
     result is the same equilibrium to the Newton tolerance STATIC_TOL_N whichever start succeeds.
     The seeds are tried in one kernel call (`kernels.static_seeded`), the points where they fail
     then solved in order as `static_q` would have after its seed; without seeds the advances run in
-    the kernel (`kernels.static_advance`) and Python takes only the points where one fails. on_each
-    is called once the path is solved."""
+    the kernel (`kernels.static_advance`) and Python takes only the points where one fails."""
     n = len(th_rad)
     if seeds is not None and np.shape(seeds) != (n, model.n_dof):
         seeds = None                     # another layout's states: no use as a start
