@@ -129,21 +129,29 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
         tries += 1
 
 
+@kernel(inline=True)
+def _solve_on_branch(q0, shift, th_in, torque, tol_N, m, w, scale, max_iter, branch_rad, ratio):
+    """`static_solve` from the absolute state q0 at the reduced input th_in (q0 - shift, the whole
+    periods removed): (solution + shift, converged with the output within branch_rad of
+    th_in / ratio: dynamics.statics._on_branch)."""
+    q, _, status = static_solve(q0 - shift, th_in, torque, m, w, scale, max_iter, tol_N)
+    return q + shift, status == 0 and abs(q[m.i_out] - th_in / ratio) < branch_rad
+
+
 @kernel
 def static_seeded(seeds, shifts, th_in, torque, tol_N, m, w, scale, max_iter, branch_rad, ratio):
-    """`static_solve` from each seed of a path (point i: the state seeds[i] - shifts[i] at input
-    th_in[i] under torque[i] to tol_N[i]), kept where it converges on the seed's branch (the output
-    within branch_rad of input / ratio; dynamics.statics._on_branch): (Q = solution + shifts[i],
-    ok). One call for the whole path: the per-point Python and dispatch cost of the fit's solves
-    (dynamics.statics.static_path) goes; what fails here the caller solves point by point."""
+    """`_solve_on_branch` from each seed of a path (point i: seeds[i], shifts[i] at input th_in[i]
+    under torque[i] to tol_N[i]): (Q, ok), Q[i] the solution where ok[i]. One call for the whole
+    path: the per-point Python and dispatch cost of the fit's solves (dynamics.statics.static_path)
+    goes; what fails here the caller solves point by point."""
     npt, n = seeds.shape
     Q = np.empty((npt, n))
     ok = np.zeros(npt, np.bool_)
-    io = m.i_out
     for i in range(npt):
-        q, _, status = static_solve(seeds[i] - shifts[i], th_in[i], torque[i], m, w, scale, max_iter, tol_N[i])
-        if status == 0 and abs(q[io] - th_in[i] / ratio) < branch_rad:
-            Q[i] = q + shifts[i]
+        q, good = _solve_on_branch(seeds[i], shifts[i], th_in[i], torque[i], tol_N[i], m, w, scale, max_iter,
+                                   branch_rad, ratio)
+        if good:
+            Q[i] = q
             ok[i] = True
     return Q, ok
 
@@ -151,17 +159,16 @@ def static_seeded(seeds, shifts, th_in, torque, tol_N, m, w, scale, max_iter, br
 @kernel
 def static_advance(Q, i0, nominal, shifts, th_in, torque, tol_N, m, w, scale, max_iter, branch_rad, ratio):
     """Points i0, i0 + 1, ... of a static path, each from the rigid-body advance of the last
-    solution (Q[i - 1] + nominal[i] - nominal[i - 1], less shifts[i]; as `static_seeded` otherwise),
-    written into Q; stops at the first point that does not converge on its branch and returns its
-    index (len(Q): all done). The caller solves that point its robust way and calls again."""
+    solution (Q[i - 1] + nominal[i] - nominal[i - 1]; as `static_seeded` otherwise), written into Q;
+    stops at the first point that does not converge on its branch and returns its index (len(Q):
+    all done). The caller solves that point its robust way and calls again."""
     npt = Q.shape[0]
-    io = m.i_out
     for i in range(i0, npt):
-        guess = Q[i - 1] + nominal[i] - nominal[i - 1]
-        q, _, status = static_solve(guess - shifts[i], th_in[i], torque[i], m, w, scale, max_iter, tol_N[i])
-        if status != 0 or abs(q[io] - th_in[i] / ratio) >= branch_rad:
+        q, good = _solve_on_branch(Q[i - 1] + nominal[i] - nominal[i - 1], shifts[i], th_in[i], torque[i], tol_N[i],
+                                   m, w, scale, max_iter, branch_rad, ratio)
+        if not good:
             return i
-        Q[i] = q + shifts[i]
+        Q[i] = q
     return npt
 
 
