@@ -194,8 +194,9 @@ def _solve_grid(mech, stiffness, ang, T, direction, seeds=None) -> tuple[np.ndar
 
 
 # Warm starts of the fit (statics.static_path `seeds`): within a `seeding()` scope, the states of the
-# last model solved on each (grid, torque, direction, condition) start the next solve there. Scoped so that a run's results do not depend on what an earlier
-# run in the same process solved (they agree to the Newton tolerance either way).
+# last model solved on each (grid, torque, direction, condition) start the next solve there. Scoped
+# so that a run's results do not depend on what an earlier run in the same process solved (they
+# agree to the Newton tolerance either way).
 _SEEDS: dict | None = None
 
 
