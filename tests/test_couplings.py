@@ -239,3 +239,18 @@ def test_the_one_search_interpolation_of_a_law_table_is_np_interp_of_both_column
         k, n = base.interp2(x, law)
         assert k == pytest.approx(np.interp(x, law[:, 0], law[:, 1]), rel=1e-14)
         assert n == pytest.approx(np.interp(x, law[:, 0], law[:, 2]), rel=1e-14)
+
+
+def test_the_assembly_of_a_model_compiles_once_for_every_solver():
+    """Statics, a static path, the time integration and Python's own calls share one compiled
+    `assemble` for a model: a literal want_k at a call site (True/False typed Literal[bool]) would
+    compile the whole assembly again for each value (it tripled the kernel unit's cold compile)."""
+    import numba
+    from dynamics.statics import nominal_q, quasi_static
+    model = model_for_tests()
+    simulate(model, LoadSpec("sine", 300.0), duration_s=0.002, store_pin_forces=False)
+    quasi_static(model, [0.0, 1.0, 2.0], 300.0)
+    evaluate(model, nominal_q(model, 0.0), 0.0, want_k=True)
+    mine = [s for s in couplings.assemble.signatures if s[6] == numba.typeof(model.arrays)]
+    assert len(mine) == 1, mine
+    assert mine[0][5] == numba.types.boolean

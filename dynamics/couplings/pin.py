@@ -213,26 +213,21 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             f[iy] += Ft * g_y
             f[ia] += Ft * g_a
             V += Vc
-            if nh == 0:
-                if want_k:
-                    gg, ii = (g_x, g_y, g_a), (ix, iy, ia)
-                    for c1 in range(3):
-                        for c2 in range(3):
-                            K[ii[c1], ii[c2]] += kt * gg[c1] * gg[c2]
-                            if Ft > 0.0:
-                                C[ii[c1], ii[c2]] += beta * rmp * kt * gg[c1] * gg[c2]
-                continue
-            for i in range(nh):              # the gap's gradient on the housing modes
-                gh[i] = ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]
-                f[hdof[i]] += Ft * gh[i]
-            if want_k:                       # K += kt g g^T over (disc x, y, rot, housing modes)
-                gg, ii = (g_x, g_y, g_a), (ix, iy, ia)
-                damp = Ft > 0.0
+            damp = Ft > 0.0
+            gg, ii = (g_x, g_y, g_a), (ix, iy, ia)
+            if want_k:                       # K += kt g g^T over the disc's (x, y, rot)
                 for c1 in range(3):
                     for c2 in range(3):
                         K[ii[c1], ii[c2]] += kt * gg[c1] * gg[c2]
                         if damp:
                             C[ii[c1], ii[c2]] += beta * rmp * kt * gg[c1] * gg[c2]
+            if nh == 0:
+                continue
+            for i in range(nh):              # the gap's gradient on the housing modes
+                gh[i] = ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]
+                f[hdof[i]] += Ft * gh[i]
+            if want_k:                       # ... and over (disc, housing modes)
+                for c1 in range(3):
                     for c2 in range(nh):
                         Kdh[d, c1, c2] += kt * gg[c1] * gh[c2]
                         Khd[d, c2, c1] += kt * gh[c2] * gg[c1]
