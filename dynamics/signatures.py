@@ -243,21 +243,47 @@ def torques_Nm(case) -> tuple:
     return tuple(f * case.rated_torque_Nm for f in TORQUE_FRACTIONS)
 
 
+def te_paths(case, stiffness, angles_deg, torques, directions=DIRECTIONS) -> np.ndarray:
+    """(directions, torques, n) TE [arcsec] of `case` as given: one quasi-static path per torque
+    and direction (TE only: the pin forces are not evaluated). Module-level and of picklable
+    arguments: one task of `atlas`'s pool."""
+    model = build_model(case, stiffness)
+    return np.array([[quasi_static(model, angles_deg, T, d, pin_forces=False).te_arcsec for T in torques]
+                     for d in directions])
+
+
 def baseline(case, stiffness, angles_deg, torques, directions=DIRECTIONS) -> np.ndarray:
     """(directions, torques, n) TE of the case as given [arcsec]."""
-    model = build_model(case, stiffness)
-    return np.array([[quasi_static(model, angles_deg, T, d).te_arcsec for T in torques] for d in directions])
+    return te_paths(case, stiffness, angles_deg, torques, directions)
+
+
+def _with_source(case, source: Source, size: float):
+    return case.with_errors(**source.errors(case, size))
 
 
 def signature(case, stiffness, source: Source, angles_deg, torques, base_te, directions=DIRECTIONS,
-              size: float | None = None) -> Signature:
-    """The source at `size` (default its unit size) through the model, per unit size."""
+              size: float | None = None, te: np.ndarray | None = None) -> Signature:
+    """The source at `size` (default its unit size) through the model, per unit size (te: its
+    `te_paths`, when already solved)."""
     size = source.unit_size if size is None else size
-    model = build_model(case.with_errors(**source.errors(case, size)), stiffness)
-    te = np.array([[quasi_static(model, angles_deg, T, d).te_arcsec for T in torques] for d in directions])
+    if te is None:
+        te = te_paths(_with_source(case, source, size), stiffness, angles_deg, torques, directions)
     spec = np.array([[te_spectrum(te[i, j] - base_te[i, j]) for j in range(len(torques))]
                      for i in range(len(directions))]) / (size / source.unit_size)
     return Signature(source, tuple(float(t) for t in torques), tuple(directions), spec)
+
+
+def _solved(jobs, pool, done=None) -> list[np.ndarray]:
+    """te_paths of each job (its argument tuple), in order: on `pool` (a concurrent.futures
+    executor) when given, else here; done(i) once job i's result is in (in order). Each path is
+    one deterministic solve: the same bits either way."""
+    futures = [pool.submit(te_paths, *j) for j in jobs] if pool is not None else None
+    out = []
+    for i, j in enumerate(jobs):
+        out.append(futures[i].result() if futures is not None else te_paths(*j))
+        if done is not None:
+            done(i)
+    return out
 
 
 def similarity(a: Signature, b: Signature) -> float:
@@ -289,18 +315,18 @@ def groups(signatures, cosine: float = GROUP_COSINE) -> list[list[int]]:
 
 
 def atlas(case, stiffness, source_list=None, n: int | None = None, torques=None, directions=DIRECTIONS,
-          progress=None) -> tuple[list[Signature], dict]:
-    """Every source's signature; returns (signatures, grid description)."""
+          progress=None, pool=None) -> tuple[list[Signature], dict]:
+    """Every source's signature; returns (signatures, grid description). pool: a process executor
+    the sources' solves run on (the same result as without)."""
     n = points_per_rev(case) if n is None else int(n)
     torques = torques_Nm(case) if torques is None else tuple(torques)
     ang = input_angles_deg(case, n)
     src = sources(case) if source_list is None else tuple(source_list)
-    base = baseline(case, stiffness, ang, torques, directions)
-    out = []
-    for i, s in enumerate(src):
-        out.append(signature(case, stiffness, s, ang, torques, base, directions))
-        if progress is not None:
-            progress(i + 1, len(src), s.id)
+    jobs = [(case, stiffness, ang, torques, directions)]
+    jobs += [(_with_source(case, s, s.unit_size), stiffness, ang, torques, directions) for s in src]
+    done = None if progress is None else (lambda i: i and progress(i, len(src), src[i - 1].id))
+    base, *tes = _solved(jobs, pool, done)
+    out = [signature(case, stiffness, s, ang, torques, base, directions, te=te) for s, te in zip(src, tes)]
     zp, zc, z2 = case.cycloid.zp, case.cycloid.zc, case.stage1.z2
     grid = {"points_per_output_rev": n, "orders_resolved_max": n // 2,
             "mesh_order_zp_zc": zp * zc, "mesh_order_folds_to": folded(zp * zc, n),
@@ -312,7 +338,7 @@ def atlas(case, stiffness, source_list=None, n: int | None = None, torques=None,
 STRUCTURE_RIGID = 1e6          # the housing stiffened this much: the rigid-housing reference
 
 
-def housing_structure(case, stiffness, torques=None, directions=DIRECTIONS) -> Signature | None:
+def housing_structure(case, stiffness, torques=None, directions=DIRECTIONS, pool=None) -> Signature | None:
     """The elastic housing's own lines (no error: its bolt pattern makes the pin support stiffness
     vary around the ring): the ideal build's TE against the same build with the housing held rigid,
     per torque and direction, on a grid fine enough for the bolt lobes (n_b-fold pattern: lines at
@@ -324,8 +350,8 @@ def housing_structure(case, stiffness, torques=None, directions=DIRECTIONS) -> S
     lobe = gcd(case.cycloid.zp, case.housing.bolt_count)
     n = points_per_rev(case, max_order=max(4 * case.cycloid.zp, 2 * lobe * case.cycloid.zc))
     ang = input_angles_deg(case, n)
-    te = baseline(case, stiffness, ang, torques, directions)
-    rigid = baseline(case, stiffness.stiffened("housing", STRUCTURE_RIGID), ang, torques, directions)
+    te, rigid = _solved([(case, stiffness, ang, torques, directions),
+                         (case, stiffness.stiffened("housing", STRUCTURE_RIGID), ang, torques, directions)], pool)
     spec = np.array([[te_spectrum(te[i, j] - rigid[i, j]) for j in range(len(torques))]
                      for i in range(len(directions))])
     src = Source("housing_structure", f"the elastic housing as built: {case.housing.bolt_count} bolts, pin support "

@@ -162,10 +162,16 @@ def cmd_signatures(args) -> int:
     out = Path(args.out)
     t0 = time.perf_counter()
     progress = None if args.quiet else (lambda i, n, sid: print(f"signatures: {i}/{n} {sid}", flush=True))
-    sigs, grid = atlas(case, stiffness, source_list=src, progress=progress)
-    data = atlas_json(case, sigs, grid, made_from(case, SCHEMA, stiffness=stiffness.made_from).to_json())
     from dynamics.signatures import housing_structure
-    hs = housing_structure(case, stiffness)     # the housing's own lines (its bolt pattern), not an error
+    from pipeline.diagnosis.simulate import process_pool
+    pool = process_pool(None)             # one process per core (fork: the loaded kernels are inherited)
+    try:
+        sigs, grid = atlas(case, stiffness, source_list=src, progress=progress, pool=pool)
+        hs = housing_structure(case, stiffness, pool=pool)  # the housing's own lines (its bolt pattern), not an error
+    finally:
+        if pool is not None:
+            pool.shutdown()
+    data = atlas_json(case, sigs, grid, made_from(case, SCHEMA, stiffness=stiffness.made_from).to_json())
     data["structure"] = None if hs is None else dict(source_json(case, hs, None, None), grid_points_per_output_rev=int(
         hs.spectrum.shape[-1] * 2 - 2), definition="the ideal build's TE with the elastic housing minus the same "
                                                    "build with the housing held rigid (arcsec, as built)")

@@ -178,3 +178,20 @@ def test_the_signatures_command_writes_the_atlas_with_its_provenance(rig, tmp_pa
     assert main(args[:-3] + ["--sources", "no_such_source"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "no_such_source" in err and "pin_radial_lobes_m1" in err
+
+
+def test_the_atlas_on_a_process_pool_is_the_atlas_solved_here(rig):
+    """The command solves the sources on one process per core: the same bits as one process."""
+    from pipeline.diagnosis.simulate import process_pool
+    src = [rig.src["pin_radial_lobes_m2"], rig.src["crank_eccentricity"]]
+    seen = []
+    here, grid = sg.atlas(rig.case, rig.stiffness, src, torques=rig.T, directions=(1,),
+                          progress=lambda i, n, sid: seen.append((i, n, sid)))
+    pool = process_pool(2)
+    try:
+        there, grid2 = sg.atlas(rig.case, rig.stiffness, src, torques=rig.T, directions=(1,), pool=pool)
+    finally:
+        pool.shutdown()
+    assert grid == grid2 and seen == [(1, 2, "pin_radial_lobes_m2"), (2, 2, "crank_eccentricity")]
+    for a, b in zip(here, there):
+        assert a.source.id == b.source.id and np.array_equal(a.spectrum, b.spectrum)
