@@ -38,21 +38,17 @@ from fem.stiffness import COMPONENTS, in_coupling, pin_series_tangents, support_
 
 def coupling_tangents(model: ReducerModel, q: np.ndarray, input_rad: float) -> dict[str, np.ndarray]:
     """Tangent stiffness -df/dq of each registered coupling alone at state q."""
-    out = {}
-    for mod, p in zip(couplings.REGISTRY, model.arrays.couplings):
-        w = _assemble_alone(model, p, q, input_rad)
-        out[mod.NAME] = w.K.copy()
-    return out
+    return {mod.NAME: _assemble_alone(model, mod.NAME, q, input_rad).K.copy() for mod in couplings.REGISTRY}
 
 
-def _assemble_alone(model: ReducerModel, p, q, input_rad: float, active=None):
-    """Work of one coupling (Params p) alone at rest at q; `active` masks the candidate contacts."""
-    arrays = model.arrays._replace(couplings=(p,))
-    w = couplings.make_work(arrays, model.slots)
+def _assemble_alone(model: ReducerModel, name: str, q, input_rad: float, active=None):
+    """Work of the coupling `name` alone at rest at q; `active` masks the candidate contacts."""
+    w = model.work()
     if active is not None:
         w.active[:] = active
+    only = [mod.NAME for mod in couplings.REGISTRY].index(name)
     couplings.assemble(np.asarray(q, float), np.zeros(model.n_dof), float(input_rad), 0.0, 0.0, True,
-                       arrays, w)
+                       model.arrays, w, only)
     return w
 
 
@@ -118,9 +114,8 @@ def pin_phase_deg(model: ReducerModel, q: np.ndarray) -> np.ndarray:
 def pin_split(model: ReducerModel, q, input_rad, dq, K_pin=None) -> dict[str, float]:
     """Per loaded contact c: its energy dq^T K_c dq (the pin kernel with only c active), split by
     the series tangent compliances at its force, the tooth pair on the FE law at its phase."""
-    p = couplings.params_of(model.arrays, "pin")
     off, _ = model.slots.contact_sets["pin"]
-    force = model.contacts(_assemble_alone(model, p, q, input_rad).force).reshape(-1)
+    force = model.contacts(_assemble_alone(model, "pin", q, input_rad).force).reshape(-1)
     pc = model.stiffness.pin_contact
     pos = np.clip(pin_phase_deg(model, q).reshape(-1), pc.position_deg[0], pc.position_deg[-1])
     k, n = np.interp(pos, pc.position_deg, pc.law_k_N_per_m_pow), np.interp(pos, pc.position_deg, pc.law_n)
@@ -128,7 +123,7 @@ def pin_split(model: ReducerModel, q, input_rad, dq, K_pin=None) -> dict[str, fl
     for c in np.flatnonzero(force > 0):
         active = np.zeros(model.slots.n_contacts, np.bool_)
         active[off + c] = True
-        energy = float(dq @ _assemble_alone(model, p, q, input_rad, active).K @ dq)
+        energy = float(dq @ _assemble_alone(model, "pin", q, input_rad, active).K @ dq)
         frac = normalised({kk: float(v[0]) for kk, v in
                            pin_series_tangents(model.stiffness, force[c:c + 1], k[c], n[c]).items()})
         for kk in w:

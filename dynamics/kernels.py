@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dynamics.couplings import assemble
+from dynamics.couplings import ALL, assemble
 from dynamics.couplings.base import kernel
 
 # candidate contacts in the time integration: a contact more than CANDIDATE_MARGIN_M open at a
@@ -34,10 +34,10 @@ CANDIDATE_MARGIN_M = 5e-6
 CANDIDATE_REFRESH = 10
 PI_RTOL = 1e-8     # static merit: relative drop of Pi that counts as progress (Pi is consistent to ~1e-9)
 SUBSTEP_LEVELS = 6  # a failed step is retried as 2, 4, ... 2^(SUBSTEP_LEVELS - 1) sub-steps
-# want_k for `assemble`: numpy bools, typed as plain `bool` (a literal True/False would be typed
-# Literal[bool] and compile the whole assembly again for each value: three copies of it, one per
-# value and one for Python's calls, in the kernel unit's cold compile)
-_YES, _NO = np.bool_(True), np.bool_(False)
+# want_k and only for `assemble`: numpy scalars, typed as plain `bool` and `int64` (a literal
+# True/False/-1 would be typed Literal[...] and compile the whole assembly again for each value:
+# three copies of it, one per value and one for Python's calls, in the kernel unit's cold compile)
+_YES, _NO, _ALL = np.bool_(True), np.bool_(False), np.int64(ALL)
 
 
 class RunState(NamedTuple):
@@ -90,7 +90,7 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
     qn, it, tries, mu = q, 0, -1, 0.0
     Pi, rs, norm2, norm = 0.0, np.zeros(n), 0.0, 0.0
     while True:
-        Vn, _, okn = assemble(qn, v, th_in, 0.0, 0.0, _YES, m, w)
+        Vn, _, okn = assemble(qn, v, th_in, 0.0, 0.0, _YES, m, w, _ALL)
         Pin = Vn + torque * qn[io]
         rsn, nn2 = _static_residual(w, io, torque, scale)
         fresh = True                     # a new iterate (or the start)
@@ -191,7 +191,7 @@ def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter,
     for it in range(max_iter):
         qn = qp + bet * h * h * a
         vn = vp + gam * h * a
-        V, tau, ok = assemble(qn, vn, th1, w1, beta, _YES, m, w)
+        V, tau, ok = assemble(qn, vn, th1, w1, beta, _YES, m, w, _ALL)
         if not ok:
             return q, v, acc, fn, it + 1, False, 0.0, 0.0
         res = Mdiag * a - (1.0 - alpha) * (f + fext) - alpha * fn
@@ -221,7 +221,7 @@ def integrate_start(st, th0, w0, T0, beta, Mdiag, m, w):
     """Initial force and acceleration of a run at rest or in motion from st.q, st.v (every contact
     evaluated); fills st.acc, st.fn, st.sums (potential, input torque) and w."""
     w.active[:] = True
-    V, tau, ok = assemble(st.q, st.v, th0, w0, beta, _NO, m, w)
+    V, tau, ok = assemble(st.q, st.v, th0, w0, beta, _NO, m, w, _ALL)
     st.fn[:] = w.f
     st.fn[m.i_out] -= T0
     st.acc[:] = st.fn / Mdiag
@@ -237,7 +237,7 @@ def _refresh_candidates(q, v, th, w_in, beta, m, w):
     active, gap = w.active, w.gap
     prev = active.copy()
     active[:] = True
-    assemble(q, v, th, w_in, beta, _NO, m, w)
+    assemble(q, v, th, w_in, beta, _NO, m, w, _ALL)
     missed = 0
     for c in range(gap.shape[0]):
         if gap[c] < 0.0 and not prev[c]:

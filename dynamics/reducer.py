@@ -116,5 +116,5 @@ def evaluate(model: ReducerModel, q: np.ndarray, input_rad: float, want_k: bool 
     w = model.work() if w is None else w
     w.active[:] = True
     _, tau, _ = couplings.assemble(np.asarray(q, float), np.zeros(model.n_dof), float(input_rad), 0.0, 0.0,
-                                   bool(want_k), model.arrays, w)
+                                   bool(want_k), model.arrays, w, couplings.ALL)
     return w, float(tau)

@@ -33,21 +33,20 @@ def loaded():
 
 
 def _alone(model, name):
-    """Model arrays with only the coupling `name` registered (same Work slots)."""
-    i = NAMES.index(name)
-    return model.arrays._replace(couplings=(model.arrays.couplings[i],))
+    """assemble's `only` for the coupling `name` alone (its registry index)."""
+    return NAMES.index(name)
 
 
-def _eval(model, arrays, q, v, th, beta=0.0, want_k=True):
+def _eval(model, only, q, v, th, beta=0.0, want_k=True):
     w = model.work()
-    V, tau, ok = couplings.assemble(q, v, th, 0.0, beta, want_k, arrays, w)
+    V, tau, ok = couplings.assemble(q, v, th, 0.0, beta, want_k, model.arrays, w, only)
     return w, V, tau, ok
 
 
 def test_the_assembler_is_the_sum_of_the_registered_couplings(loaded):
     model, s, v = loaded
     th = math.radians(s.input_angle_deg)
-    w, V, tau, ok = _eval(model, model.arrays, s.q, v, th, beta=1e-5)
+    w, V, tau, ok = _eval(model, couplings.ALL, s.q, v, th, beta=1e-5)
     parts = [_eval(model, _alone(model, n), s.q, v, th, beta=1e-5) for n in NAMES]
     assert ok and all(p[3] for p in parts)
     for attr in ("f", "K", "C"):
@@ -73,15 +72,15 @@ POTENTIAL_RTOL = {"mesh": 1e-6, "support": 1e-6, "needle": 1e-6, "pin": 1e-3, "h
 @pytest.mark.parametrize("name", NAMES)
 def test_each_coupling_tangent_matches_finite_differences_of_its_force(loaded, name):
     model, s, _ = loaded
-    arrays, th = _alone(model, name), math.radians(s.input_angle_deg)
-    K = _eval(model, arrays, s.q, np.zeros(model.n_dof), th)[0].K.copy()
+    only, th = _alone(model, name), math.radians(s.input_angle_deg)
+    K = _eval(model, only, s.q, np.zeros(model.n_dof), th)[0].K.copy()
     h0 = min(1e-9, 0.2 * np.abs(s.pin_gap_m).min())     # never straddle a pin's contact onset
     Kfd = np.zeros_like(K)
     for j in range(model.n_dof):
         e = np.zeros(model.n_dof)
         e[j] = h0 / model.scale[j]
-        fp = _eval(model, arrays, s.q + e, np.zeros(model.n_dof), th, want_k=False)[0].f
-        fm = _eval(model, arrays, s.q - e, np.zeros(model.n_dof), th, want_k=False)[0].f
+        fp = _eval(model, only, s.q + e, np.zeros(model.n_dof), th, want_k=False)[0].f
+        fm = _eval(model, only, s.q - e, np.zeros(model.n_dof), th, want_k=False)[0].f
         Kfd[:, j] = -(fp - fm) / (2 * e[j])
     S = np.diag(1 / model.scale)
     scale = np.abs(S @ K @ S).max()
@@ -92,30 +91,30 @@ def test_each_coupling_tangent_matches_finite_differences_of_its_force(loaded, n
 @pytest.mark.parametrize("name", NAMES)
 def test_each_coupling_force_is_minus_the_gradient_of_its_potential(loaded, name):
     model, s, _ = loaded
-    arrays, th = _alone(model, name), math.radians(s.input_angle_deg)
+    only, th = _alone(model, name), math.radians(s.input_angle_deg)
     z = np.zeros(model.n_dof)
-    f = _eval(model, arrays, s.q, z, th, want_k=False)[0].f.copy()
+    f = _eval(model, only, s.q, z, th, want_k=False)[0].f.copy()
     h0 = min(1e-9, 0.2 * np.abs(s.pin_gap_m).min())
     g = np.zeros(model.n_dof)
     for j in range(model.n_dof):
         e = np.zeros(model.n_dof)
         e[j] = h0 / model.scale[j]
-        g[j] = (_eval(model, arrays, s.q + e, z, th, want_k=False)[1]
-                - _eval(model, arrays, s.q - e, z, th, want_k=False)[1]) / (2 * e[j])
+        g[j] = (_eval(model, only, s.q + e, z, th, want_k=False)[1]
+                - _eval(model, only, s.q - e, z, th, want_k=False)[1]) / (2 * e[j])
     assert np.abs((f + g) / model.scale).max() < POTENTIAL_RTOL[name] * np.abs(f / model.scale).max()
 
 
 @pytest.mark.parametrize("name", NAMES)
 def test_each_coupling_damping_is_minus_the_velocity_derivative_of_its_force(loaded, name):
     model, s, v = loaded
-    arrays, th, beta = _alone(model, name), math.radians(s.input_angle_deg), 2e-5
-    C = _eval(model, arrays, s.q, v, th, beta=beta)[0].C.copy()
+    only, th, beta = _alone(model, name), math.radians(s.input_angle_deg), 2e-5
+    C = _eval(model, only, s.q, v, th, beta=beta)[0].C.copy()
     Cfd = np.zeros_like(C)
     for j in range(model.n_dof):
         e = np.zeros(model.n_dof)
         e[j] = 1e-6 / model.scale[j]
-        fp = _eval(model, arrays, s.q, v + e, th, beta=beta, want_k=False)[0].f
-        fm = _eval(model, arrays, s.q, v - e, th, beta=beta, want_k=False)[0].f
+        fp = _eval(model, only, s.q, v + e, th, beta=beta, want_k=False)[0].f
+        fm = _eval(model, only, s.q, v - e, th, beta=beta, want_k=False)[0].f
         Cfd[:, j] = -(fp - fm) / (2 * e[j])
     S = np.diag(1 / model.scale)
     assert np.abs(S @ C @ S).max() > 0
@@ -242,15 +241,19 @@ def test_the_one_search_interpolation_of_a_law_table_is_np_interp_of_both_column
 
 
 def test_the_assembly_of_a_model_compiles_once_for_every_solver():
-    """Statics, a static path, the time integration and Python's own calls share one compiled
-    `assemble` for a model: a literal want_k at a call site (True/False typed Literal[bool]) would
-    compile the whole assembly again for each value (it tripled the kernel unit's cold compile)."""
+    """Statics, a static path, the time integration, Python's own calls and the compliance budget's
+    per-coupling tangents share one compiled `assemble` for a model: a literal want_k or only at a
+    call site (typed Literal[...]) would compile the whole assembly again for each value (it tripled
+    the kernel unit's cold compile), and so would a model of one coupling (5 more compiles)."""
     import numba
+    from dynamics.budget import coupling_tangents
     from dynamics.statics import nominal_q, quasi_static
     model = model_for_tests()
     simulate(model, LoadSpec("sine", 300.0), duration_s=0.002, store_pin_forces=False)
     quasi_static(model, [0.0, 1.0, 2.0], 300.0)
-    evaluate(model, nominal_q(model, 0.0), 0.0, want_k=True)
+    q = nominal_q(model, 0.0)
+    evaluate(model, q, 0.0, want_k=True)
+    coupling_tangents(model, q, 0.0)
     mine = [s for s in couplings.assemble.signatures if s[6] == numba.typeof(model.arrays)]
     assert len(mine) == 1, mine
-    assert mine[0][5] == numba.types.boolean
+    assert mine[0][5] == numba.types.boolean and mine[0][8] == numba.types.int64

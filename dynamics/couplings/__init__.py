@@ -130,11 +130,17 @@ def _add_overload(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     return impl
 
 
+ALL = -1        # assemble's `only`: every registered coupling
+
+
 @kernel
-def assemble(q, v, th_in, w_in, beta, want_k, m, w):
+def assemble(q, v, th_in, w_in, beta, want_k, m, w, only):
     """Internal generalized force w.f (on the system), tangent w.K = -df/dq and damping
-    w.C = -df/dv (when want_k) of every coupling; fills the contacts' gap/force and the named
-    outputs. Only contacts with w.active are evaluated. Returns (potential energy, input torque, ok)."""
+    w.C = -df/dv (when want_k) of every coupling (only = ALL) or of the one at registry index
+    `only` (the compliance budget's per-coupling tangents: the same model type, so the same
+    compiled assembly; a model of one coupling would compile it again for each); fills the
+    contacts' gap/force and the named outputs. Only contacts with w.active are evaluated.
+    Returns (potential energy, input torque, ok)."""
     w.f[:] = 0.0
     if want_k:
         w.K[:, :] = 0.0
@@ -142,7 +148,10 @@ def assemble(q, v, th_in, w_in, beta, want_k, m, w):
     V = 0.0
     tau_in = 0.0
     ok = True
+    k = 0
     for p in literal_unroll(m.couplings):
-        V, tau_in, okc = add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in)
-        ok = ok and okc
+        if only < 0 or k == only:
+            V, tau_in, okc = add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in)
+            ok = ok and okc
+        k += 1
     return V, tau_in, ok
