@@ -85,8 +85,8 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
     K = w.K
     A = np.empty((n, n))
     Kc = np.empty((n, n))
-    # one assembly call site (the couplings are inlined at each: one copy less to compile); the
-    # first evaluation is the start, each later one a damped step's trial point
+    # one assembly call site (each caller links the compiled assembly into its own machine code);
+    # the first evaluation is the start, each later one a damped step's trial point
     qn, it, tries, mu = q, 0, -1, 0.0
     Pi, rs, norm2, norm = 0.0, np.zeros(n), 0.0, 0.0
     while True:
