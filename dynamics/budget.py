@@ -46,9 +46,8 @@ def _assemble_alone(model: ReducerModel, name: str, q, input_rad: float, active=
     w = model.work()
     if active is not None:
         w.active[:] = active
-    only = [mod.NAME for mod in couplings.REGISTRY].index(name)
     couplings.assemble(np.asarray(q, float), np.zeros(model.n_dof), float(input_rad), 0.0, 0.0, True,
-                       model.arrays, w, only)
+                       model.arrays, w, couplings.index_of(name))
     return w
 
 

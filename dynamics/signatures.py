@@ -243,18 +243,13 @@ def torques_Nm(case) -> tuple:
     return tuple(f * case.rated_torque_Nm for f in TORQUE_FRACTIONS)
 
 
-def te_paths(case, stiffness, angles_deg, torques, directions=DIRECTIONS) -> np.ndarray:
+def baseline(case, stiffness, angles_deg, torques, directions=DIRECTIONS) -> np.ndarray:
     """(directions, torques, n) TE [arcsec] of `case` as given: one quasi-static path per torque
     and direction (TE only: the pin forces are not evaluated). Module-level and of picklable
-    arguments: one task of `atlas`'s pool."""
+    arguments: one task of `atlas`'s pool (the sources' cases are given with their error)."""
     model = build_model(case, stiffness)
     return np.array([[quasi_static(model, angles_deg, T, d, pin_forces=False).te_arcsec for T in torques]
                      for d in directions])
-
-
-def baseline(case, stiffness, angles_deg, torques, directions=DIRECTIONS) -> np.ndarray:
-    """(directions, torques, n) TE of the case as given [arcsec]."""
-    return te_paths(case, stiffness, angles_deg, torques, directions)
 
 
 def _with_source(case, source: Source, size: float):
@@ -264,23 +259,23 @@ def _with_source(case, source: Source, size: float):
 def signature(case, stiffness, source: Source, angles_deg, torques, base_te, directions=DIRECTIONS,
               size: float | None = None, te: np.ndarray | None = None) -> Signature:
     """The source at `size` (default its unit size) through the model, per unit size (te: its
-    `te_paths`, when already solved)."""
+    `baseline`, when already solved)."""
     size = source.unit_size if size is None else size
     if te is None:
-        te = te_paths(_with_source(case, source, size), stiffness, angles_deg, torques, directions)
+        te = baseline(_with_source(case, source, size), stiffness, angles_deg, torques, directions)
     spec = np.array([[te_spectrum(te[i, j] - base_te[i, j]) for j in range(len(torques))]
                      for i in range(len(directions))]) / (size / source.unit_size)
     return Signature(source, tuple(float(t) for t in torques), tuple(directions), spec)
 
 
 def _solved(jobs, pool, done=None) -> list[np.ndarray]:
-    """te_paths of each job (its argument tuple), in order: on `pool` (a concurrent.futures
+    """`baseline` of each job (its argument tuple), in order: on `pool` (a concurrent.futures
     executor) when given, else here; done(i) once job i's result is in (in order). Each path is
     one deterministic solve: the same bits either way."""
-    futures = [pool.submit(te_paths, *j) for j in jobs] if pool is not None else None
+    futures = [pool.submit(baseline, *j) for j in jobs] if pool is not None else None
     out = []
     for i, j in enumerate(jobs):
-        out.append(futures[i].result() if futures is not None else te_paths(*j))
+        out.append(futures[i].result() if futures is not None else baseline(*j))
         if done is not None:
             done(i)
     return out

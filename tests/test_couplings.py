@@ -34,7 +34,7 @@ def loaded():
 
 def _alone(model, name):
     """assemble's `only` for the coupling `name` alone (its registry index)."""
-    return NAMES.index(name)
+    return couplings.index_of(name)
 
 
 def _eval(model, only, q, v, th, beta=0.0, want_k=True):

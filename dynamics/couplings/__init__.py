@@ -106,12 +106,17 @@ def make_work(arrays: ModelArrays, slots: Slots) -> Work:
                 out=np.zeros(slots.n_out))
 
 
+def index_of(name: str) -> int:
+    """Registry index of the coupling `name` (its place in ModelArrays.couplings, `assemble`'s only)."""
+    for i, mod in enumerate(REGISTRY):
+        if mod.NAME == name:
+            return i
+    raise KeyError(f"no coupling {name!r}; registered: {', '.join(m.NAME for m in REGISTRY)}")
+
+
 def params_of(arrays: ModelArrays, name: str):
     """The Params of the registered coupling `name`."""
-    for mod, p in zip(REGISTRY, arrays.couplings):
-        if mod.NAME == name:
-            return p
-    raise KeyError(f"no coupling {name!r}; registered: {', '.join(m.NAME for m in REGISTRY)}")
+    return arrays.couplings[index_of(name)]
 
 
 def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
