@@ -164,7 +164,7 @@ def cmd_signatures(args) -> int:
     progress = None if args.quiet else (lambda i, n, sid: print(f"signatures: {i}/{n} {sid}", flush=True))
     from dynamics.signatures import housing_structure
     from pipeline.diagnosis.simulate import process_pool
-    pool = process_pool(None)             # one process per core (fork: the loaded kernels are inherited)
+    pool = process_pool(None)             # one process per core; each loads the kernels from their disk cache
     try:
         sigs, grid = atlas(case, stiffness, source_list=src, progress=progress, pool=pool)
         hs = housing_structure(case, stiffness, pool=pool)  # the housing's own lines (its bolt pattern), not an error
