@@ -85,8 +85,8 @@ stage-geometry: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/geometry/profile.csv)
 $(BUILD)/%/geometry/profile.csv: $(CASE_FP) $(SRC_geometry) | $(STAMP)
 	$(RUN) geometry --case $(CASE_FILE_$*) --out $(BUILD)/$*/geometry $(Q)
 
-# The crankshaft tet mesh is made once (fTetWild is not run-to-run reproducible) and reused; its rule
-# depends only on the code the mesh command runs, not on the FE solvers.
+# The crankshaft tet mesh (extruded sections, deterministic, fem.shaft) is made once and reused; its
+# rule depends only on the code the mesh command runs, not on the FE solvers.
 stage-mesh: $(foreach c,$(CASE_NAMES),$(BUILD)/$(c)/mesh/crankshaft_mesh.npz)
 $(BUILD)/%/mesh/crankshaft_mesh.npz: $(CASE_FP) $(BUILD)/%/geometry/profile.csv $(SRC_mesh) | $(STAMP)
 	$(RUN) mesh --case $(CASE_FILE_$*) --out $(BUILD)/$*/mesh $(Q)

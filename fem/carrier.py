@@ -45,7 +45,8 @@ import scipy.sparse as sp
 
 from fem import hertz
 from fem.joint_layers import JointLayers, joint_layer_tets, layer_material
-from fem.mesh import Mesh3D, MeshError, cylinder_band_facets, tet_mesh_from_solid, triangulate
+from fem.mesh import (Mesh3D, MeshError, cylinder_band_facets, equal_area_polygon, extruded_tets, inside_convex,
+                      tet_mesh_from_solid, triangulate, z_levels)
 from fem.sparse_fe import elasticity_matrix, node_ordered_lu_solve, two_level_pcg  # noqa: F401 (fem.carrier.* kept)
 from geometry.carrier import CarrierGeometry
 
@@ -88,30 +89,10 @@ def _size_mm(g: CarrierGeometry, h: float):
 
 
 def _circle_mm(cx: float, cy: float, r: float, size, min_sides: int) -> np.ndarray:
-    """Regular polygon at the size field's spacing with the circle's AREA (vertex radius
-    r sqrt(2 pi / (n sin(2 pi / n)))): exact volume; second moment within 0.7 % from 6 sides on."""
+    """Equal-area polygon (fem.mesh.equal_area_polygon) at the size field's spacing."""
     a = np.linspace(0, 2 * np.pi, 64)
     spacing = float(np.mean(size(np.column_stack([cx + r * np.cos(a), cy + r * np.sin(a)]))))
-    n = max(min_sides, int(math.ceil(2 * math.pi * r / spacing)))
-    rv = r * math.sqrt(2 * math.pi / (n * math.sin(2 * math.pi / n)))
-    t = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
-    return np.column_stack([cx + rv * np.cos(t), cy + rv * np.sin(t)])
-
-
-def _levels(breaks: list[float], size_z) -> np.ndarray:
-    """z-levels through every break, graded by size_z(z) in between (marched, then scaled to land
-    on the next break)."""
-    b = np.unique(np.round(breaks, 9))
-    out = [b[:1]]
-    for z0, z1 in zip(b[:-1], b[1:]):
-        s = [z0]
-        while s[-1] < z1:
-            s.append(s[-1] + min(size_z(s[-1]), size_z(min(s[-1] + 0.5 * size_z(s[-1]), z1))))
-        if len(s) > 2 and s[-1] - z1 > 0.5 * (s[-1] - s[-2]):
-            s.pop()                              # overshoot by more than half a step: one step fewer
-        s = np.asarray(s)
-        out.append(z0 + (s[1:] - z0) * (z1 - z0) / (s[-1] - z0))
-    return np.concatenate(out)
+    return equal_area_polygon(cx, cy, r, max(min_sides, int(math.ceil(2 * math.pi * r / spacing))))
 
 
 def extruded_mesh(g: CarrierGeometry, edge_length_m: float) -> tuple[Mesh3D, np.ndarray]:
@@ -133,38 +114,19 @@ def extruded_mesh(g: CarrierGeometry, edge_length_m: float) -> tuple[Mesh3D, np.
                           holes=np.array(holes) * 1e-3, extra_loops=[lp * 1e-3 for lp in loops + pillars],
                           size=lambda xy: size(xy * 1e3) * 1e-3)
     p2 = p2 * 1e3
-    cen = p2[tri].mean(axis=1)
     in_pillar = np.zeros(len(tri), bool)
-    for poly in pillars:                   # inside a convex counter-clockwise polygon: left of every edge
-        e = np.roll(poly, -1, axis=0) - poly
-        rel = cen[:, None, :] - poly[None, :, :]
-        in_pillar |= np.all(e[None, :, 0] * rel[:, :, 1] - e[None, :, 1] * rel[:, :, 0] > 0, axis=1)
+    for poly in pillars:
+        in_pillar |= inside_convex(poly, p2[tri].mean(axis=1))
     bands = [zs + d for zs in g.seat_z_mm for d in (-g.bearing_width_mm / 2, g.bearing_width_mm / 2)]
     edges_z = np.array([0.0, g.gap_mm, *bands])          # pillar roots and ring ends
 
     def size_z(z: float) -> float:
         return h * min(ROOT_SIZE + float(np.min(np.abs(z - edges_z))) / g.pillar_radius_mm, COARSEST)
-    z = _levels([*g.end_plate_z_mm, *g.flange_z_mm, *bands], size_z)
-    n2 = len(p2)
-    a, b, c = np.sort(tri, axis=1).T       # vertex-index rule: each quad's diagonal leaves its lowest index
-    tets, region = [], []
-    for k in range(len(z) - 1):
-        zm = 0.5 * (z[k] + z[k + 1])
-        lab = END_PLATE if zm < 0 else (FLANGE if zm > g.gap_mm else PILLAR)
-        sel = in_pillar if lab == PILLAR else slice(None)
-        A, B, C = a[sel] + k * n2, b[sel] + k * n2, c[sel] + k * n2
-        t = np.concatenate([np.column_stack([A, B, C, C + n2]), np.column_stack([A, B, B + n2, C + n2]),
-                            np.column_stack([A, A + n2, B + n2, C + n2])])
-        tets.append(t)
-        region.append(np.full(len(t), lab))
-    p = np.column_stack([np.tile(p2, (len(z), 1)), np.repeat(z, n2)]) * 1e-3
-    t = np.concatenate(tets)
-    d = np.einsum("ij,ij->i", np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]), p[t[:, 3]] - p[t[:, 0]])
-    t[d < 0] = t[d < 0][:, [0, 2, 1, 3]]                 # positive orientation
-    used = np.unique(t)
-    remap = -np.ones(len(p), np.int64)
-    remap[used] = np.arange(len(used))
-    return Mesh3D(p[used], remap[t]), np.concatenate(region)
+    z = z_levels([*g.end_plate_z_mm, *g.flange_z_mm, *bands], size_z)
+    zm = 0.5 * (z[:-1] + z[1:])
+    lab = np.where(zm < 0, END_PLATE, np.where(zm > g.gap_mm, FLANGE, PILLAR))
+    m, layer = extruded_tets(p2, tri, z, lambda k, _: in_pillar if lab[k] == PILLAR else slice(None))
+    return Mesh3D(m.points * 1e-3, m.tetrahedra), lab[layer]
 
 
 def carrier_mesh(g: CarrierGeometry, edge_length_m: float | None = None, *,

@@ -17,7 +17,7 @@ from geometry.artifacts import InputError, write_json_atomic
 
 
 def register(sub) -> None:
-    m = sub.add_parser("mesh", help="the crankshaft tet mesh (pytetwild) that the fem stage reuses")
+    m = sub.add_parser("mesh", help="the crankshaft tet mesh (extruded sections) that the fem stage reuses")
     m.add_argument("--case", required=True, help="case TOML")
     m.add_argument("--out", required=True, help="output folder")
     m.add_argument("--crank-edge-mm", type=float, default=None,

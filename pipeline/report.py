@@ -45,7 +45,7 @@ SECTIONS = (
             "offset/equidistant modification. The backlash here is the rigid free play of the unloaded profile.",
             ("geometry.json",)),
     Section("Meshes", "mesh",
-            "Crankshaft tetrahedra from the CadQuery solid (pytetwild), made once and reused by the FE stage."),
+            "Crankshaft tetrahedra: prisms of one section triangulation (every circle of the CadQuery solid embedded), deterministic, made once and reused by the FE stage."),
     Section("Finite elements", "fem",
             "scikit-fem: 2D cycloid-pin contact (condensed, exact non-penetration), 3D crankshaft on its "
             "bearings, needle (turning-arm) bearing; reduced to the load-deflection curves of stiffness.json "

@@ -154,10 +154,12 @@ def test_opposite_loads_tilt_the_eccentrics_and_same_loads_bend_the_shaft_symmet
 def test_output_compliance_splits_into_the_opposite_and_parallel_parts(rv40e):
     case, fe = rv40e
     out = ct.output_compliance(case, fe)
-    # the two parts are the isotropic-shaft decomposition of the full quadratic form (the FE's x-y
-    # coupling and x/y difference are ~1 %): measured sum / total = 0.99..1.01
+    # the two parts decompose the full quadratic form with the eccentrics' 2x2 blocks averaged (the
+    # shaft is anisotropic: y bending 9.6 % stiffer than x on the extruded mesh, 8.5 % at h; the two
+    # eccentrics' blocks differ by ~0.1 %): exact to that difference. The x-entries-only split
+    # was off by 4.6 % (5.2 % at h / 1.6): the anisotropy is the physics, not the mesh
     assert out["opposite_part_rad_per_Nm"] + out["parallel_part_rad_per_Nm"] == pytest.approx(
-        out["compliance_rad_per_Nm"], rel=0.03)
+        out["compliance_rad_per_Nm"], rel=0.005)
     # the tangential share per crank is T / (2 n a) for one N m of output torque (statics)
     a = case.carrier.crank_circle_radius_mm * 1e-3
     assert out["force_parallel_N_per_Nm"] == pytest.approx(0.5 / (case.carrier.crank_count * a), rel=1e-6)
