@@ -12,6 +12,10 @@ reported parameters (diagnosis.json units), `evidence` writes the finding's sent
 column carries it, so the cause is named on its order lines alone and its Jacobian columns are
 re-taken by the model during the extension fit (extension.py); `nonlinear` asks for the latter
 alone (a response far from linear over the parameter's range, e.g. exp(u)).
+`additive`: the cause's TE change is the same whatever the other causes' sizes (a reading error of
+the output encoder, added after the mechanism solves): its library columns are exact Jacobian
+columns at every iterate. Any other cause acts on the mechanism and its slope moves with the
+threshold causes sharing its contacts: the extension re-takes its columns when the fit holds one.
 Bounds: the physical range of each parameter (a negative clearance, a negative stiffness are
 outside), enforced by the extension fit (extension.py: the model never sees a value outside; a
 cause whose fit sits on a bound or is pulled past it is not reported). Parameterise so that every
@@ -173,6 +177,7 @@ class Cause:
     unit_size: float = 1.0           # signature step, parameter units (same for every parameter)
     dc_even: bool = False
     nonlinear: bool = False          # far from linear over its range: Jacobian re-taken in the fit
+    additive: bool = False           # a reading error: its TE adds to any model's (exact library columns)
 
     def params(self, case) -> tuple[Param, ...]:
         raise NotImplementedError

@@ -21,6 +21,7 @@ class OutputCoaxiality(Cause):
     description = "output mounted off-axis: the output encoder reads e/r sin(theta + phi)"
     signature = "1x, independent of load and direction"
     unit_size = 1.0
+    additive = True   # a reading of the output encoder: adds to the mechanism's TE whatever it is
 
     def params(self, case):
         return (Param("coaxiality_cos_um", "um", (-BOUND_UM, BOUND_UM)),

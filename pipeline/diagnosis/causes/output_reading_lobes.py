@@ -27,6 +27,7 @@ class OutputReadingLobes(LobeCause):
     description = "output encoder reading error in m lobes (mounting deformation, graduation)"
     signature = "m x lines (m = 2, 3), the same at every torque and in both directions"
     unit_size = 1.0
+    additive = True   # a reading of the output encoder: adds to the mechanism's TE whatever it is
     harmonics = (2, 3)
     bound = 20.0
     param_prefix, param_unit, report_unit = "reading", "um", "um"
