@@ -309,7 +309,8 @@ def quasi_static(model: ReducerModel, input_angle_deg, torque_Nm, direction: int
 
 
 def static_path(model: ReducerModel, th_rad: np.ndarray, T: np.ndarray, direction: int = +1,
-                seeds: np.ndarray | None = None, w=None, on_each=None) -> tuple[np.ndarray, np.ndarray]:
+                seeds: np.ndarray | None = None, w=None, on_each=None,
+                fallback_seeds: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The static equilibria along input angles th_rad [rad] under applied torques T (as solved by
     `static_q`, each warm-started): (carrier angles [rad], states Q (n, n_dof)). on_each(i, q) is
     called for each point in order once the path is solved.
@@ -320,10 +321,17 @@ def static_path(model: ReducerModel, th_rad: np.ndarray, T: np.ndarray, directio
     result is the same equilibrium to the Newton tolerance STATIC_TOL_N whichever start succeeds.
     The seeds are tried in one kernel call (`kernels.static_seeded`), the points where they fail
     then solved in order as `static_q` would have after its seed; without seeds the advances run in
-    the kernel (`kernels.static_advance`) and Python takes only the points where one fails."""
+    the kernel (`kernels.static_advance`) and Python takes only the points where one fails.
+    fallback_seeds: a second set of seeds (same shape), tried in one more kernel call at the points
+    where `seeds` failed before the in-order solves (the fit's column predictor, then the last
+    model's states: pipeline.diagnosis.simulate)."""
     n = len(th_rad)
     if seeds is not None and np.shape(seeds) != (n, model.n_dof):
         seeds = None                     # another layout's states: no use as a start
+    if fallback_seeds is not None and np.shape(fallback_seeds) != (n, model.n_dof):
+        fallback_seeds = None
+    if seeds is None:
+        seeds, fallback_seeds = fallback_seeds, None
     w = model.work() if w is None else w
     shift = turn_shift(model)
     Q = np.empty((n, model.n_dof))
@@ -335,6 +343,13 @@ def static_path(model: ReducerModel, th_rad: np.ndarray, T: np.ndarray, directio
     args = (model.arrays, w, model.scale, NEWTON_MAX_ITER, _branch_rad(model), model.ratio)
     if seeds is not None:                # every seed tried in one kernel call (static_q's first try)
         Qs, done = kn.static_seeded(np.ascontiguousarray(seeds, float), shifts, th_red, Ts, tols, *args)
+        if fallback_seeds is not None and not done.all():
+            idx = np.flatnonzero(~done)
+            Qf, ok = kn.static_seeded(np.ascontiguousarray(np.asarray(fallback_seeds, float)[idx]),
+                                      np.ascontiguousarray(shifts[idx]), np.ascontiguousarray(th_red[idx]),
+                                      np.ascontiguousarray(Ts[idx]), np.ascontiguousarray(tols[idx]), *args)
+            Qs[idx[ok]] = Qf[ok]
+            done[idx[ok]] = True
         Q[done] = Qs[done]
         q = None
         for i in range(n):

@@ -35,6 +35,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from pipeline.diagnosis.causes.base import Fitted
+from pipeline.diagnosis.simulate import tangent_seeds
 from pipeline.diagnosis.zeros import offset_columns, remove_offsets, rms
 
 REFRESH_STEP = 0.3   # forward-difference step of a re-taken Jacobian column, in library units
@@ -202,6 +203,7 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
     x0, *_ = np.linalg.lstsq(-J, y0 * wf, rcond=None)    # linear start: the library's solution
     x0 = _project(x0, chosen, cols, lims, lo, hi, nz)
     spans, scan = _refreshed_columns(chosen, cols), _threshold_spans(chosen, cols)
+    tag = tuple((c.id, i) for c in chosen for i in range(cols[c.id].X.shape[1]))   # column names (cause, its column)
     starts = [_project(_scaled(x0, scan, f), chosen, cols, lims, lo, hi, nz) for f in START_SCALES] if scan else [x0]
     if warm is not None:   # a refit after a drop: the previous fit's kept causes and offsets as well
         ps_w, off_w = warm
@@ -213,7 +215,7 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
     note = ""
     try:
         method = "trf" if bounded or len(rows) <= len(x0) else "lm"
-        sol = optimize.least_squares(fun, x0, jac=_jacobian(fun, J, spans), x_scale="jac",
+        sol = optimize.least_squares(fun, x0, jac=_jacobian(fun, J, spans, model_at, tag), x_scale="jac",
                                      max_nfev=max_nfev if method == "lm" else CONTINUE_FACTOR * max_nfev,
                                      bounds=(lo, hi) if bounded else (-np.inf, np.inf), method=method,
                                      **({} if method == "lm" else {"callback": _continues(max_nfev)}))
@@ -225,7 +227,7 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
     ps = _clamped(chosen, cols, lims, x[:nz])
     sims_after = run.te_of(*_apply(run.case, run.stiffness, chosen, ps))
     r_x = fun(x)
-    step, *_ = np.linalg.lstsq(_jacobian(fun, J, spans)(x), -r_x, rcond=None)   # Gauss-Newton, unbounded
+    step, *_ = np.linalg.lstsq(_jacobian(fun, J, spans, model_at, tag)(x), -r_x, rcond=None)   # Gauss-Newton, unbounded
     wanted = _unclamped(chosen, cols, (x + step)[:nz])
     cov, tq = _covariance(r_x, J)
     sds = [np.sqrt(np.maximum(np.diag(V @ C @ V.T), 0.0)) for V, C in _blocks(chosen, cols, cov)]
@@ -387,16 +389,26 @@ def _scaled(x0, spans, f):
     return x
 
 
-def _jacobian(fun, J, spans):
+def _jacobian(fun, J, spans, model_at=None, tag=()):
+    """The Jacobian at x: J with the `spans` columns re-taken by the model (forward differences).
+    model_at(x): the (case, stiffness) fun(x) solves; with it each column's solves start from the
+    model at x's states plus the column's state change at the previous iterate (simulate.tangent_seeds:
+    the same equilibria to the Newton tolerance, fewer iterations); tag[j] names column j (the
+    same column of the same cause in a refit after a drop shares its state change)."""
     def jac(x):
         if not spans:
             return J
         Jx, r0 = J.copy(), fun(x)
+        base = model_at(x) if model_at is not None else None
         for k0, q, h in spans:
             for j in range(k0, k0 + q):
                 dx = np.zeros_like(x)
                 dx[j] = h
-                Jx[:, j] = (fun(x + dx) - r0) / h
+                if base is None:
+                    Jx[:, j] = (fun(x + dx) - r0) / h
+                else:
+                    with tangent_seeds(*base, tag[j]):
+                        Jx[:, j] = (fun(x + dx) - r0) / h
         return Jx
     return jac
 

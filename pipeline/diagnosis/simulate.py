@@ -182,9 +182,10 @@ def quasi_static_te(case, stiffness, input_angle_deg: np.ndarray, torque_Nm,
 def _carrier_deg(model, ang, T, direction, seeds=None) -> tuple[np.ndarray, np.ndarray]:
     """(carrier angles [deg], states) of the static path on one grid (seeds: `static_path`)."""
     from dynamics.statics import static_path
+    seeds, fallback = seeds if isinstance(seeds, tuple) else (seeds, None)
     # T is the record's torque (+ resists forward rotation): the load applied to the output in
     # either direction of motion, as quasi_static(model, ang, direction * T, direction) applies it
-    carrier, Q = static_path(model, np.deg2rad(ang), T, int(direction), seeds=seeds)
+    carrier, Q = static_path(model, np.deg2rad(ang), T, int(direction), seeds=seeds, fallback_seeds=fallback)
     return np.rad2deg(carrier), Q
 
 
@@ -197,7 +198,16 @@ def _solve_grid(mech, stiffness, ang, T, direction, seeds=None) -> tuple[np.ndar
 # last model solved on each (grid, torque, direction, condition) start the next solve there. Scoped
 # so that a run's results do not depend on what an earlier run in the same process solved (they
 # agree to the Newton tolerance either way).
+# Inside a `tangent_seeds(base case, base stiffness, tag)` scope (the extension's Jacobian column
+# `tag` at an iterate, extension._jacobian) a grid's solve starts instead from the base model's
+# states there plus the state change the same column made at the previous iterate (a first-order
+# predictor of the column's equilibria: the column's step is the same, only the iterate moved),
+# the last model's states as the fallback where that start fails: the same equilibria to the
+# Newton tolerance, about 20 % fewer Newton iterations per column (RV-160N grids, 0 and 300 N m).
 _SEEDS: dict | None = None
+_STATES: dict = {}        # carrier key -> states of that solve (within a seeding scope)
+_STEPS: dict = {}         # (tag, grid part of the key) -> column states - base states
+_TANGENT: tuple | None = None    # (base case, base stiffness, tag) inside tangent_seeds
 
 
 class seeding:
@@ -208,16 +218,56 @@ class seeding:
         self.outer = _SEEDS is not None
         if not self.outer:
             _SEEDS = {}
+            _STATES.clear()
+            _STEPS.clear()
         return self
 
     def __exit__(self, *exc):
         global _SEEDS
         if not self.outer:
             _SEEDS = None
+            _STATES.clear()
+            _STEPS.clear()
+
+
+class tangent_seeds:
+    """Context: the solves inside are Jacobian column `tag` of the model (case, stiffness) (module
+    comment above); no effect outside a `seeding()` scope."""
+
+    def __init__(self, case, stiffness, tag):
+        self.spec = (case, stiffness, tag)
+
+    def __enter__(self):
+        global _TANGENT
+        self.prev, _TANGENT = _TANGENT, (self.spec if _SEEDS is not None else None)
+        return self
+
+    def __exit__(self, *exc):
+        global _TANGENT
+        _TANGENT = self.prev
+
+
+def _base_states(key):
+    """(tag, states of the tangent scope's base model on key's grid) or None."""
+    if _TANGENT is None or _SEEDS is None:
+        return None
+    case, stiffness, tag = _TANGENT
+    base = _STATES.get((_mechanics(case), stiffness_digest(stiffness)) + key[2:])
+    return None if base is None else (tag, base)
 
 
 def _seeds_for(key):
-    return None if _SEEDS is None else _SEEDS.get(key[2:])
+    """The seeds of a solve on key's grid: the last model's states, or in a tangent scope with a
+    step known (predictor, last model's states) (statics.static_path's seeds and fallback)."""
+    if _SEEDS is None:
+        return None
+    last = _SEEDS.get(key[2:])
+    tb = _base_states(key)
+    if tb is not None:
+        step = _STEPS.get((tb[0], key[2:]))
+        if step is not None and step.shape == tb[1].shape:
+            return (tb[1] + step, last)
+    return last
 
 
 def _seeded(key, solved) -> np.ndarray:
@@ -225,6 +275,13 @@ def _seeded(key, solved) -> np.ndarray:
     carrier, Q = solved
     if _SEEDS is not None:
         _SEEDS[key[2:]] = Q
+        _STATES.pop(key, None)
+        while len(_STATES) >= _CACHE_SIZE:
+            _STATES.pop(next(iter(_STATES)))
+        _STATES[key] = Q
+        tb = _base_states(key)
+        if tb is not None and np.shape(Q) == np.shape(tb[1]):
+            _STEPS[(tb[0], key[2:])] = Q - tb[1]
     return carrier
 
 
@@ -236,7 +293,7 @@ def _prefetch(case, stiffness, records, n: int, pool) -> None:
             continue
         d = r.direction
         ang = periodic_grid_deg(case, n, d)
-        T = np.full(ang.shape, float(np.median(r.output_torque_Nm)))
+        T = np.full(ang.shape, r.torque_Nm)
         key, mech, _ = _carrier_key(case, stiffness, ang, T, d, record_condition(r))
         if key not in _CARRIERS and key not in jobs:
             jobs[key] = (mech, ang, T, d)
@@ -272,8 +329,7 @@ def process_pool(workers: int | None):
 
 
 def _steady(case, record: BenchRecord) -> bool:
-    T = record.output_torque_Nm
-    return float(np.subtract(*np.percentile(T, [95, 5]))) <= STEADY_TORQUE * case.rated_torque_Nm
+    return record.torque_spread_Nm <= STEADY_TORQUE * case.rated_torque_Nm
 
 
 def simulation_indices(record: BenchRecord, points_per_rev: int) -> np.ndarray:
@@ -318,7 +374,7 @@ def simulate_record(te_model: TEModel, case, stiffness, record: BenchRecord,
         period = 360.0 * case.ratio                      # input degrees per output revolution
         d = record.direction
         grid = periodic_grid_deg(case, n, d)
-        te = np.asarray(_call(te_model, case, stiffness, grid, float(np.median(T)), d, cond), float)
+        te = np.asarray(_call(te_model, case, stiffness, grid, record.torque_Nm, d, cond), float)
         return trig_interp(te[::d] if d > 0 else np.r_[te[0], te[:0:-1]], record.input_angle_deg / period)
     idx = simulation_indices(record, n)
     ang = record.input_angle_deg[idx]
