@@ -43,6 +43,9 @@ class FemRun:
     tooth_map: pin_contact.ToothPairMap
     crank_fields: dict
     artifacts: dict = field(default_factory=dict)   # every component's in-memory artifacts (pictures)
+    timings_s: dict = field(default_factory=dict)   # wall seconds per component and of the tooth map (the
+    # fem command writes them to timings.json: kept out of stiffness.json, which is then the same bytes
+    # for the same inputs)
 
 
 def table_loads_N(case) -> dict:
@@ -130,8 +133,7 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
     tables = ctx["loads"]
     timing = {f"{n}_s": r.seconds for n, r in results.items()}
     tm = results["pin_contact"].artifacts["tooth_map"]
-    extras = {"timing_s": dict(tm.timing_s, **timing, total_s=time.perf_counter() - t0)}
-    model = assemble(case, results, extras)
+    model = assemble(case, results, {})
     mom = case.operation.momentary_torque_Nm
     model.sources["load_ranges"] = (f"pin and needle tables up to LOAD_MARGIN = {LOAD_MARGIN:g} x the classical force "
                                     f"at the catalog momentary torque {mom:g} N m (fem.reduce: the lumped model's "
@@ -143,8 +145,12 @@ def build_stiffness(case, *, mesh_size_m: float | None = None, crank_edge_m: flo
                                    "needle_classical_at_momentary_N": float(tables["needle"][-1] / LOAD_MARGIN),
                                    "margin": LOAD_MARGIN}
     for n, mod in checks.items():
+        t1 = time.perf_counter()
         model.checks[n] = json.loads(json.dumps(mod.check(case, model, prepared[n])))
+        timing[f"{n}_s"] = prepared[n]["seconds"] + time.perf_counter() - t1
         model.sources[n] = mod.__doc__.split("\n\n")[0].replace("\n", " ")
     model.check(case.name)
     artifacts = {k: v for r in results.values() for k, v in r.artifacts.items()}
-    return FemRun(model, tm, artifacts["crank_fields"], artifacts)
+    timings = dict(timing, tooth_map=dict(tm.timing_s), carrier_levels=results["carrier"].artifacts["carrier_timing_s"],
+                   total_s=time.perf_counter() - t0)
+    return FemRun(model, tm, artifacts["crank_fields"], artifacts, timings)

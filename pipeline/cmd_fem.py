@@ -126,6 +126,9 @@ def _case(args, out: Path) -> int:
     # what it was made from: the case and, when reused, the mesh stage's mesh
     prov = made_from(case, stiffness.SCHEMA, mesh=crank_mesh.made_from if crank_mesh is not None else None)
     stiffness.save(dataclasses.replace(runres.model, made_from=prov), out / "stiffness.json")
+    write_json_atomic(out / "timings.json", {"case": case.name, "wall_s": runres.timings_s,
+                                             "note": "wall seconds of this run (not in stiffness.json, which "
+                                                     "is the same bytes for the same inputs on one BLAS thread)"})
     _write_meshes(runres, out)
     _pictures(runres, out)
     if "housing_fe" in runres.artifacts:

@@ -47,6 +47,26 @@ def test_stiffness_json_round_trips_through_the_schema(tmp_path, coarse_run):
 
 
 @pytest.mark.slow
+def test_stiffness_json_holds_no_wall_time_and_the_run_keeps_its_timings(coarse_run):
+    # stiffness.json is the same bytes for the same inputs (a fresh clone reproduces it); the wall
+    # seconds go to the fem command's timings.json
+    def keys(o):
+        if isinstance(o, dict):
+            for k, v in o.items():
+                yield k
+                yield from keys(v)
+        elif isinstance(o, list):
+            for v in o:
+                yield from keys(v)
+    m = coarse_run.model
+    found = [k for k in keys([m.extras, m.checks]) if "seconds" in k or "timing" in k or k.endswith("_s")]
+    assert not found, found
+    t = coarse_run.timings_s
+    assert t["total_s"] > 0 and t["carrier_s"] > 0 and t["crank_path_s"] > 0 and "solve_s" in t["tooth_map"]
+    assert len(t["carrier_levels"]) == 2 and all(v["solve_s"] > 0 for v in t["carrier_levels"].values())
+
+
+@pytest.mark.slow
 def test_stepped_crankshaft_lies_between_the_journal_beam_and_the_stepped_beam(coarse_run):
     # references: fem.shaft.crankshaft_beam_reference (stepped Timoshenko beam, unit-load
     # integration over the layout's sections, pinned at the bearing centres) for fem.shaft's single

@@ -37,8 +37,7 @@ def compute(case, ctx) -> Result:
                           "hertz_half_width_m": tm.hertz_half_width_m.tolist(),
                           "profile_curvature_radius_m": tm.curvature_radius_m.tolist(),
                           "rated_pin_force_N": rated,
-                          "tooth_secant_stiffness_at_rated_N_per_m": (rated / d_rated).tolist(),
-                          "tooth_map_timing_s": dict(tm.timing_s)},
+                          "tooth_secant_stiffness_at_rated_N_per_m": (rated / d_rated).tolist()},
                   artifacts={"tooth_map": tm})
 
 
