@@ -360,23 +360,22 @@ def _refreshed_columns(chosen, cols) -> list[tuple[int, int, float]]:
     share (issue 23: the joint fit stopped half way, the pattern's lost motion left to backlash).
     Reading errors (`additive`) add to the output reading after the mechanism solves: their
     library columns are exact at every iterate. Causes far from linear are `_threshold_spans`."""
-    spans, k = [], 0
     coupled = any(c.dc_even or c.nonlinear for c in chosen)
-    for c in chosen:
-        q = cols[c.id].X.shape[1]
-        if c.dc_even or c.nonlinear or (coupled and not c.additive):
-            spans.append((k, q, REFRESH_STEP * c.unit_size))
-        k += q
-    return spans
+    return _spans(chosen, cols, lambda c: c.dc_even or c.nonlinear or (coupled and not c.additive))
 
 
 def _threshold_spans(chosen, cols) -> list[tuple[int, int, float]]:
     """(first column, count, step) of each `dc_even` or `nonlinear` cause's columns: the causes
     whose size the library's secant mis-states (the start's coarse scan, START_SCALES)."""
+    return _spans(chosen, cols, lambda c: c.dc_even or c.nonlinear)
+
+
+def _spans(chosen, cols, keep) -> list[tuple[int, int, float]]:
+    """(first column, count, REFRESH_STEP x unit) of the chosen causes' column blocks where keep(cause)."""
     spans, k = [], 0
     for c in chosen:
         q = cols[c.id].X.shape[1]
-        if c.dc_even or c.nonlinear:
+        if keep(c):
             spans.append((k, q, REFRESH_STEP * c.unit_size))
         k += q
     return spans
