@@ -21,8 +21,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from fem import hertz
-from fem.mesh import (Mesh3D, MeshError, equal_area_polygon, extruded_tets, inside_convex, tet_mesh_from_solid,
-                      triangulate, z_levels)
+from fem.mesh import (Mesh3D, MeshError, equal_area_polygon, extruded_cylinder, extruded_tets, inside_convex,
+                      tet_mesh_from_solid, triangulate, z_levels)
 
 
 @dataclass(frozen=True)
@@ -161,14 +161,18 @@ def _dof_xyz(basis) -> np.ndarray:
 
 
 def plain_shaft_check(radius_m: float = 5e-3, length_m: float = 100e-3, E: float = 206e9,
-                      nu: float = 0.3, edge_length_m: float = 2.5e-3) -> dict:
+                      nu: float = 0.3, edge_length_m: float = 2.5e-3, *, mesher: str = "extruded") -> dict:
     """Cantilever plain shaft: end face z = 0 clamped, tip face z = L loaded by a transverse
     force F and separately by a torque T. FE (tip-face averages) against Timoshenko beam theory
-    and Saint-Venant torsion (fem.hertz)."""
-    import cadquery as cq
-    from fem import hertz
-    solid = cq.Workplane("XY").circle(radius_m * 1e3).extrude(length_m * 1e3)
-    m3 = tet_mesh_from_solid(solid, edge_length_m)
+    and Saint-Venant torsion (fem.hertz). Mesher 'extruded' (fem.mesh.extruded_cylinder,
+    deterministic) or 'tetwild' (pytetwild on the CadQuery cylinder; varies run to run)."""
+    if mesher == "extruded":
+        m3 = extruded_cylinder(radius_m, 0.0, length_m, edge_length_m)
+    elif mesher == "tetwild":
+        import cadquery as cq
+        m3 = tet_mesh_from_solid(cq.Workplane("XY").circle(radius_m * 1e3).extrude(length_m * 1e3), edge_length_m)
+    else:
+        raise MeshError(f"plain shaft mesher = {mesher!r}: allowed 'extruded', 'tetwild'")
     F, T = 100.0, 10.0
     res = _cantilever(m3, radius_m, length_m, E, nu, F, T)
     res["bending_closed_form_m"] = hertz.cantilever_tip_deflection(F, length_m, radius_m, E, nu)

@@ -12,12 +12,16 @@ CASES = Path(__file__).resolve().parents[1] / "cases"
 
 
 @pytest.mark.slow
-def test_plain_shaft_bends_and_twists_within_3_percent_of_beam_theory():
-    r = plain_shaft_check(edge_length_m=4e-3)
-    # Timoshenko cantilever F L^3/(3EI) + F L/(kappa G A): measured 1.2 % (P2 tets, 4 mm edges)
-    assert abs(r["bending_error"]) < 0.03
-    # Saint-Venant T L/(G J) with J of the meshed (polygonal) section: measured < 1 %
-    assert abs(r["twist_rad"] / r["twist_closed_form_meshed_section_rad"] - 1) < 0.03
+def test_plain_shaft_bends_and_twists_within_2_percent_of_beam_theory_and_converges():
+    coarse, fine = plain_shaft_check(edge_length_m=4e-3), plain_shaft_check(edge_length_m=2.5e-3)
+    # Timoshenko cantilever F L^3/(3EI) + F L/(kappa G A), P2 prisms of fem.mesh.extruded_cylinder:
+    # measured -0.84 %, -0.69 %, -0.63 % at 4, 2.5, 1.6 mm edges (the fully clamped root face is
+    # stiffer than the beam's built-in end); pytetwild's draws at 4 mm gave +1.2 % and +12.6 %
+    assert abs(coarse["bending_error"]) < 0.02
+    assert abs(fine["bending_error"]) < abs(coarse["bending_error"])
+    # Saint-Venant T L/(G J) with J of the meshed (polygonal) section: measured < 1e-4
+    for r in (coarse, fine):
+        assert abs(r["twist_rad"] / r["twist_closed_form_meshed_section_rad"] - 1) < 0.01
 
 
 @pytest.fixture(scope="module")
@@ -88,12 +92,11 @@ def test_the_pinned_and_held_solvers_match_the_sparse_lu_of_the_same_systems():
     """fem.shaft.pinned_solve (the saddle-point system through one SPD solve, 3-2-1 held) and
     held_solve (two-level PCG) against elastic.Factorized (SuperLU of the saddle-point system and of
     the held stiffness): the same linear systems, so equal to round-off (PCG_RTOL 1e-12)."""
-    import cadquery as cq
     import scipy.sparse as sp
     from fem import elastic
-    from fem.mesh import tet_mesh_from_solid
+    from fem.mesh import extruded_cylinder
     from fem.shaft import held_solve, p2_stiffness, pinned_solve
-    m3 = tet_mesh_from_solid(cq.Workplane("XY").circle(5.0).extrude(40.0), 4e-3)
+    m3 = extruded_cylinder(5e-3, 0.0, 40e-3, 4e-3)
     E, nu = 206e9, 0.3
     basis, K = p2_stiffness(m3, E, nu)
     K_skfem = elastic.stiffness(elastic.basis_3d(m3, order=2), E, nu)
