@@ -17,7 +17,7 @@ def compute(case, ctx) -> Result:
     cs, fields = shaft.crankshaft_stiffness(case, ctx["crank_edge_m"], mesh3=ctx["crank_mesh"])
     beam = shaft.crankshaft_beam_reference(case)
     return Result(NAME, {"crankshaft_torsional_stiffness_Nm_per_rad": cs.torsional_stiffness_Nm_per_rad},
-                  {"crankshaft": "torsion: 3D FE (P2 tetrahedra, pytetwild) of the project's stepped crankshaft, "
+                  {"crankshaft": "torsion: 3D FE (P2 tetrahedra, prisms of one section mesh: fem.shaft.extruded_crankshaft_mesh) of the project's stepped crankshaft, "
                                  "planet-seat face to eccentric 1 (fem.shaft); bending = 1 / C11 of crank_bending"},
                   {"crankshaft": {"torsion_fe_over_beam": cs.torsional_stiffness_Nm_per_rad
                                   / beam["torsional_stiffness_Nm_per_rad"],
