@@ -154,3 +154,39 @@ def table_text(table: ConditionsTable, results: list[dict]) -> str:
         eff = res["efficiency"] if row.torque_Nm > 0 else None
         w.writerow(list(row.fields) + [_cell(eff if c == "efficiency" else res[c]) for c in RESULT_COLUMNS])
     return buf.getvalue()
+
+
+ARCSEC_PER_ARCMIN = 60.0
+
+
+def gap_lines(speed_rpm, torque_Nm, measured_arcsec, predicted_arcsec) -> dict:
+    """The forward-backward gap against torque, measured beside predicted, split into its two
+    physical parts. Per input speed with two torques or more, the least-squares line
+    gap = a + b T: a the zero-load gap (lost motion, no-load drag), b the wind-up, both directions'
+    (gap = -2 T / k, so k = 2 / |b| N m/arcsec = 120 / |b| N m/arcmin: the rigidity the line implies).
+    Then two what-ifs over the rows on those lines (diagnostic, nothing is changed in the model): the
+    gap RMS error with each speed's predicted slope replaced by the bench's (the stiffness right,
+    the zero-load gap as predicted) and with the predicted intercept replaced by the bench's (the
+    zero-load gap right, the stiffness as predicted): which part of the error each explains."""
+    import numpy as np
+    v, T = np.asarray(speed_rpm, float), np.asarray(torque_Nm, float)
+    m, p = np.asarray(measured_arcsec, float), np.asarray(predicted_arcsec, float)
+    by, on = {}, np.zeros(len(v), bool)
+    p_slope, p_icpt = p.copy(), p.copy()
+    for s in sorted(set(v.tolist())):
+        k = v == s
+        if len(set(T[k].tolist())) < 2:
+            continue
+        (bm, am), (bp, ap) = np.polyfit(T[k], m[k], 1), np.polyfit(T[k], p[k], 1)
+        on |= k
+        p_slope[k] -= (bp - bm) * T[k]
+        p_icpt[k] -= ap - am
+        by[f"{s:g}"] = {"rows": int(k.sum()), "measured_arcsec_per_Nm": float(bm), "predicted_arcsec_per_Nm": float(bp),
+                        "measured_zero_load_gap_arcsec": float(am), "predicted_zero_load_gap_arcsec": float(ap),
+                        "measured_rigidity_Nm_per_arcmin": 2 * ARCSEC_PER_ARCMIN / abs(bm) if bm else None,
+                        "predicted_rigidity_Nm_per_arcmin": 2 * ARCSEC_PER_ARCMIN / abs(bp) if bp else None}
+    rms = lambda e: float(np.sqrt(np.mean(e ** 2))) if len(e) else None  # noqa: E731
+    return {"by_speed_rpm": by, "rows_on_lines": int(on.sum()),
+            "gap_rms_error_on_lines_arcsec": rms(p[on] - m[on]),
+            "gap_rms_error_with_bench_slopes_arcsec": rms(p_slope[on] - m[on]),
+            "gap_rms_error_with_bench_zero_load_gaps_arcsec": rms(p_icpt[on] - m[on])}

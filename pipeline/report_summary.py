@@ -247,4 +247,14 @@ def operating_rows(case_dir: Path) -> list[Row]:
                         f"{m['gap_rms_error_arcsec']:.1f} arcsec (frictionless {m['gap_rms_error_frictionless_arcsec']:.1f})",
                         f"{m['rows']} bench conditions (conditions_25C.csv)", "conditions/conditions.json",
                         f"gap per N m by input speed: {txt} arcsec/(N m)"))
+        gl = m.get("gap_lines")
+        if gl and gl["by_speed_rpm"]:
+            k = "".join(f"; {s} rpm {v['predicted_rigidity_Nm_per_arcmin']:.0f} (bench {v['measured_rigidity_Nm_per_arcmin']:.0f})"
+                        for s, v in gl["by_speed_rpm"].items() if v["rows"] >= 5 and v["measured_rigidity_Nm_per_arcmin"])
+            rows.append(Row("the gap's error split: with the bench's wind-up slopes / zero-load gaps put in",
+                            f"{gl['gap_rms_error_with_bench_slopes_arcsec']:.1f} / "
+                            f"{gl['gap_rms_error_with_bench_zero_load_gaps_arcsec']:.1f} arcsec RMS "
+                            f"(as predicted {gl['gap_rms_error_on_lines_arcsec']:.1f})",
+                            "what-ifs on the bench's own lines, the model unchanged", "conditions/conditions.json",
+                            f"rigidity the gap lines imply, N m/arcmin{k}"))
     return rows

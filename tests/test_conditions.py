@@ -120,3 +120,27 @@ def test_the_real_bench_table_passes_the_contract():
     assert len(t.rows) == 47
     assert {r.input_speed_rpm for r in t.rows} == {100, 300, 900, 1700, 1800}
     assert all(r.oil_temperature_C == 25 for r in t.rows)
+
+
+def test_gap_lines_split_the_error_into_the_wind_up_and_the_zero_load_gap():
+    from dynamics.conditions import gap_lines
+    v = [100.0] * 4 + [1800.0] * 3 + [300.0]
+    T = [0.0, 400.0, 800.0, 1200.0, 100.0, 900.0, 1800.0, 500.0]
+    bench = [-22.0 - 0.289 * t if s == 100 else -32.0 - 0.242 * t for s, t in zip(v, T)]
+    bench[-1] = -180.0
+    # a model 2x too stiff, its zero-load gap right: the bench's slopes remove the whole error
+    stiff = [(-22.0 if s == 100 else -32.0) - 0.5 * (b + (22.0 if s == 100 else 32.0)) for s, b in zip(v, bench)]
+    r = gap_lines(v, T, bench, stiff)
+    assert set(r["by_speed_rpm"]) == {"100", "1800"} and r["rows_on_lines"] == 7     # 300 rpm: one torque
+    s100 = r["by_speed_rpm"]["100"]
+    assert s100["measured_arcsec_per_Nm"] == pytest.approx(-0.289) and s100["measured_zero_load_gap_arcsec"] == pytest.approx(-22.0)
+    assert s100["measured_rigidity_Nm_per_arcmin"] == pytest.approx(120 / 0.289)
+    assert s100["predicted_rigidity_Nm_per_arcmin"] == pytest.approx(2 * 120 / 0.289)
+    assert r["gap_rms_error_with_bench_slopes_arcsec"] == pytest.approx(0.0, abs=1e-9)
+    assert r["gap_rms_error_with_bench_zero_load_gaps_arcsec"] == pytest.approx(r["gap_rms_error_on_lines_arcsec"])
+    # the stiffness right, 20 arcsec more lost motion: the bench's zero-load gaps remove it all
+    loose = [b - 20.0 for b in bench]
+    r = gap_lines(v, T, bench, loose)
+    assert r["gap_rms_error_on_lines_arcsec"] == pytest.approx(20.0)
+    assert r["gap_rms_error_with_bench_zero_load_gaps_arcsec"] == pytest.approx(0.0, abs=1e-9)
+    assert r["gap_rms_error_with_bench_slopes_arcsec"] == pytest.approx(20.0)
