@@ -156,9 +156,6 @@ def table_text(table: ConditionsTable, results: list[dict]) -> str:
     return buf.getvalue()
 
 
-ARCSEC_PER_ARCMIN = 60.0
-
-
 def gap_lines(speed_rpm, torque_Nm, measured_arcsec, predicted_arcsec) -> dict:
     """The forward-backward gap against torque, measured beside predicted, split into its two
     physical parts. Per input speed with two torques or more, the least-squares line
@@ -169,6 +166,8 @@ def gap_lines(speed_rpm, torque_Nm, measured_arcsec, predicted_arcsec) -> dict:
     the zero-load gap as predicted) and with the predicted intercept replaced by the bench's (the
     zero-load gap right, the stiffness as predicted): which part of the error each explains."""
     import numpy as np
+
+    from dynamics.results import ARCSEC_PER_ARCMIN
     v, T = np.asarray(speed_rpm, float), np.asarray(torque_Nm, float)
     m, p = np.asarray(measured_arcsec, float), np.asarray(predicted_arcsec, float)
     by, on = {}, np.zeros(len(v), bool)

@@ -59,9 +59,7 @@ import numpy as np
 from scipy.ndimage import median_filter
 
 from dynamics.records import comment_number
-
-ARCSEC_PER_RAD = 180.0 / np.pi * 3600.0
-ARCSEC_PER_ARCMIN = 60.0
+from dynamics.results import ARCSEC_PER_ARCMIN, ARCSEC_PER_RAD
 
 UNIT_TOL = 0.05           # a stated speed agrees with the samples within 5 %
 TIME_UNITS = {1e-3: "milliseconds", 1e-6: "microseconds", 60.0: "minutes"}   # factor to seconds

@@ -16,6 +16,7 @@ from geometry.artifacts import InputError
 
 ARCSEC_PER_DEG = 3600.0                        # TE is reported in arcsec (DESIGN.md)
 ARCSEC_PER_RAD = 180.0 / np.pi * ARCSEC_PER_DEG  # 206264.806...
+ARCSEC_PER_ARCMIN = 60.0
 
 
 class ResultError(InputError):
