@@ -94,3 +94,27 @@ def test_a_records_median_torque_spread_and_speed_are_its_own_and_computed_once(
     assert r.input_speed_rpm == pytest.approx(486.0, rel=1e-9)
     assert {"torque_Nm", "torque_spread_Nm", "input_speed_rpm"} <= set(vars(r))    # cached on the record
     assert sim.record_condition(r) == sim.Condition(486.0, None)
+
+
+def test_re_taken_columns_are_kept_while_no_coordinate_moved_half_a_step_and_re_taken_beyond():
+    from pipeline.diagnosis.extension import REUSE_SHARE, _jacobian
+    calls = []
+
+    def fun(x):                          # a nonlinear residual whose Jacobian changes with x
+        calls.append(x.copy())
+        return np.array([x[0] ** 2 + x[1], np.sin(x[1]) + 3.0 * x[2], x[2] ** 3])
+
+    h = 0.3
+    J0 = np.eye(3)                       # library columns: column 2 is never re-taken
+    jac = _jacobian(fun, J0, [(0, 2, h)])
+    x = np.array([1.0, 0.5, 2.0])
+    J1 = jac(x)
+    assert len(calls) == 3               # f(x) and one forward difference per re-taken column
+    assert J1[0, 0] == pytest.approx((1.3 ** 2 - 1.0) / h) and np.array_equal(J1[:, 2], J0[:, 2])
+    # every re-taken coordinate within REUSE_SHARE h (the free column 2 may move at will): kept
+    near = x + np.array([0.99 * REUSE_SHARE * h, -0.99 * REUSE_SHARE * h, 5.0])
+    assert jac(near) is J1 and len(calls) == 3
+    # one re-taken coordinate beyond it: re-taken at the new point
+    far = x + np.array([0.0, 1.01 * REUSE_SHARE * h, 0.0])
+    J2 = jac(far)
+    assert len(calls) == 6 and J2[1, 1] == pytest.approx((np.sin(far[1] + h) - np.sin(far[1])) / h)

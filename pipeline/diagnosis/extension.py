@@ -3,7 +3,8 @@
 scipy.optimize.least_squares on the records' features (features.py) with one free offset per zero
 group; the Jacobian comes from the signature library (a linearisation the solver uses for its
 steps only; a threshold cause's columns, and beside one every cause not `additive`, are re-taken
-by the model at each iterate: `_refreshed_columns`). A refit after a drop starts from the best of
+by the model at each iterate that moved one of their coordinates by half its difference step or more:
+`_refreshed_columns`, `_jacobian`). A refit after a drop starts from the best of
 the library's start and the previous fit's kept causes; past its evaluation budget a fit goes on
 only while its last step still lowers the chi^2 significantly (`_continues`).
 Bounds: every model the fit evaluates has each parameter inside its cause's physical range
@@ -46,6 +47,7 @@ EXPLAINS_SHARE = 0.5   # ... and must lower the residual there by half (RMS) to 
 AT_BOUND_SHARE = 0.2   # a cause held at its bound must still lower its claimed features this much
 CONTINUE_P = 1e-3     # past the budget, a fit goes on while its last step's chi^2 drop is this significant
 CONTINUE_FACTOR = 3    # ... up to this many times the budget of evaluations (_continues)
+REUSE_SHARE = 0.5      # re-taken columns are kept while no re-taken coordinate moved more than this share of its step
 
 
 @dataclass(frozen=True)
@@ -213,9 +215,10 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
         x0 = min(starts, key=lambda x: _cost(fun, x))   # start from the best candidate by cost
     bounded = bool(np.any(np.isfinite(lo) | np.isfinite(hi)))
     note = ""
+    jacobian = _jacobian(fun, J, spans, model_at, tag)
     try:
         method = "trf" if bounded or len(rows) <= len(x0) else "lm"
-        sol = optimize.least_squares(fun, x0, jac=_jacobian(fun, J, spans, model_at, tag), x_scale="jac",
+        sol = optimize.least_squares(fun, x0, jac=jacobian, x_scale="jac",
                                      max_nfev=max_nfev if method == "lm" else CONTINUE_FACTOR * max_nfev,
                                      bounds=(lo, hi) if bounded else (-np.inf, np.inf), method=method,
                                      **({} if method == "lm" else {"callback": _continues(max_nfev)}))
@@ -227,7 +230,7 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
     ps = _clamped(chosen, cols, lims, x[:nz])
     sims_after = run.te_of(*_apply(run.case, run.stiffness, chosen, ps))
     r_x = fun(x)
-    step, *_ = np.linalg.lstsq(_jacobian(fun, J, spans, model_at, tag)(x), -r_x, rcond=None)   # Gauss-Newton, unbounded
+    step, *_ = np.linalg.lstsq(jacobian(x), -r_x, rcond=None)   # Gauss-Newton, unbounded
     wanted = _unclamped(chosen, cols, (x + step)[:nz])
     cov, tq = _covariance(r_x, J)
     sds = [np.sqrt(np.maximum(np.diag(V @ C @ V.T), 0.0)) for V, C in _blocks(chosen, cols, cov)]
@@ -393,10 +396,18 @@ def _jacobian(fun, J, spans, model_at=None, tag=()):
     model_at(x): the (case, stiffness) fun(x) solves; with it each column's solves start from the
     model at x's states plus the column's state change at the previous iterate (simulate.tangent_seeds:
     the same equilibria to the Newton tolerance, fewer iterations); tag[j] names column j (the
-    same column of the same cause in a refit after a drop shares its state change)."""
+    same column of the same cause in a refit after a drop shares its state change).
+    A column is a secant over [x_j, x_j + h]: where no re-taken coordinate has moved by more than
+    REUSE_SHARE h since the last re-take, the secants overlap by more than half and that Jacobian
+    is returned again instead of re-taking it."""
+    last = {}
+
     def jac(x):
         if not spans:
             return J
+        if "x" in last and all(np.all(np.abs(x[k0:k0 + q] - last["x"][k0:k0 + q]) <= REUSE_SHARE * h)
+                               for k0, q, h in spans):
+            return last["J"]
         Jx, r0 = J.copy(), fun(x)
         base = model_at(x) if model_at is not None else None
         for k0, q, h in spans:
@@ -408,6 +419,7 @@ def _jacobian(fun, J, spans, model_at=None, tag=()):
                 else:
                     with tangent_seeds(*base, tag[j]):
                         Jx[:, j] = (fun(x + dx) - r0) / h
+        last.update(x=x.copy(), J=Jx)
         return Jx
     return jac
 
