@@ -6,7 +6,7 @@ steps only; a threshold cause's columns, and beside one every cause not `additiv
 by the model at each iterate that moved one of their coordinates by half its difference step or more:
 `_refreshed_columns`, `_jacobian`). A refit after a drop starts from the best of
 the library's start and the previous fit's kept causes; past its evaluation budget a fit goes on
-only while its last step still lowers the chi^2 significantly (`_continues`).
+only while its last step still lowers the chi^2 significantly (`_Budget`).
 Bounds: every model the fit evaluates has each parameter inside its cause's physical range
 (`Param.bounds`): p = clip(V z) before `apply`, and parameters that map one to one onto a fit
 coordinate are bounded in the solver too (trust-region reflective).
@@ -46,7 +46,7 @@ CLAIM_REL = 0.1      # a cause claims the features where its fitted effect is >=
 EXPLAINS_SHARE = 0.5   # ... and must lower the residual there by half (RMS) to be named
 AT_BOUND_SHARE = 0.2   # a cause held at its bound must still lower its claimed features this much
 CONTINUE_P = 1e-3     # past the budget, a fit goes on while its last step's chi^2 drop is this significant
-CONTINUE_FACTOR = 3    # ... up to this many times the budget of evaluations (_continues)
+CONTINUE_FACTOR = 3    # ... up to this many times the budget of evaluations (_Budget)
 REUSE_SHARE = 0.5      # re-taken columns are kept while no re-taken coordinate moved more than this share of its step
 
 
@@ -216,13 +216,16 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
     bounded = bool(np.any(np.isfinite(lo) | np.isfinite(hi)))
     note = ""
     jacobian = _jacobian(fun, J, spans, model_at, tag)
+    budget = _Budget(max_nfev, fun)
     try:
         method = "trf" if bounded or len(rows) <= len(x0) else "lm"
-        sol = optimize.least_squares(fun, x0, jac=jacobian, x_scale="jac",
+        sol = optimize.least_squares(fun if method == "lm" else budget.fun, x0, jac=jacobian, x_scale="jac",
                                      max_nfev=max_nfev if method == "lm" else CONTINUE_FACTOR * max_nfev,
                                      bounds=(lo, hi) if bounded else (-np.inf, np.inf), method=method,
-                                     **({} if method == "lm" else {"callback": _continues(max_nfev)}))
+                                     **({} if method == "lm" else {"callback": budget.callback}))
         x = sol.x
+    except _BudgetSpent:
+        x = budget.x
     except ValueError as exc:   # a step left the valid geometry (CaseError): keep the linear start
         x = x0
         note = (f"fit of {', '.join(c.id for c in chosen)}: a step left the valid geometry "
@@ -319,27 +322,44 @@ def claimed_share(run: Run, fit_idx, effect_ts, before_ts, after_ts) -> float:
     return float(1.0 - np.linalg.norm(aft[claim]) / b) if b > 0 else 0.0
 
 
-def _continues(max_nfev: int):
-    """The solver's callback: within `max_nfev` evaluations the fit runs as budgeted; past it, it
-    goes on (up to CONTINUE_FACTOR x the budget) only while its last step still lowered the chi^2
+class _BudgetSpent(Exception):
+    """Past the fit's budget with no significant step to go on from (`_Budget.fun`)."""
+
+
+class _Budget:
+    """The fit's evaluation budget: within `max_nfev` evaluations the fit runs as budgeted; past it,
+    it goes on (up to CONTINUE_FACTOR x the budget) only while its last step still lowered the chi^2
     significantly: F = (drop / q) / (chi^2 / dof), q the fit's coordinates, p < CONTINUE_P (the
     selection's p_enter). A drop that large is more than q free coordinates take out of noise at
     the fit's own residual variance: the fit is still moving along a misfit the records hold, and
     a cause named from it would be a point half way (issue 23: a pin ring pattern's lost motion left
     to backlash at the budget, the pattern alone at the fit's end). A step within that noise stops
-    it, so a fit limited by lines no cause makes (the real records) keeps its budget."""
-    last = [None]   # the cost after the previous step
+    it, so a fit limited by lines no cause makes (the real records) keeps its budget.
+    Enforced on each accepted step (`callback`, the solver's) and on each evaluation (`fun`, the
+    solver's residual): past the budget a trial point is evaluated only while the last accepted step
+    was significant, else the fit ends at that step (the callback alone sees accepted steps only: the
+    real records' refit spent 9 rejected trial points past its budget of 8, its cost unchanged)."""
 
-    def callback(intermediate_result):
+    def __init__(self, max_nfev: int, fun):
+        self.max_nfev, self._fun = max_nfev, fun
+        self.n, self.cost, self.x, self.significant = 0, None, None, True
+
+    def fun(self, x):
+        self.n += 1
+        if self.n > self.max_nfev and not self.significant:
+            raise _BudgetSpent
+        return self._fun(x)
+
+    def callback(self, intermediate_result):
         r = intermediate_result
-        prev, last[0] = last[0], float(r.cost)
-        if r.nfev < max_nfev or prev is None:
+        prev, self.cost, self.x = self.cost, float(r.cost), np.array(r.x, float)
+        if prev is None:
             return
         q, dof = len(r.x), max(len(r.fun) - len(r.x), 1)
         F = ((prev - r.cost) / q) / max(r.cost / dof, 1e-300)
-        if stats.f.sf(F, q, dof) >= CONTINUE_P:
+        self.significant = bool(stats.f.sf(F, q, dof) < CONTINUE_P)
+        if r.nfev >= self.max_nfev and not self.significant:
             raise StopIteration
-    return callback
 
 
 def _cost(fun, x) -> float:
