@@ -126,6 +126,11 @@ def _stop(pool: ProcessPoolExecutor, graceful: bool = False) -> None:
     full test run.)"""
     table = getattr(pool, "_processes", None) or {}   # pid -> process; 3.14: pool.terminate_workers()
     procs = list(table.values())
+    # the manager thread, read before shutdown: shutdown(wait=False) drops the executor's reference to
+    # it (and to pool._processes) while the thread goes on joining the workers; left running, it reaped
+    # workers under this thread's joins (a pid reaped by the other thread reads as alive here) and
+    # after the return (a worker still listed by multiprocessing.active_children(): tests/test_sweep.py)
+    manager = getattr(pool, "_executor_manager_thread", None)
     pool.shutdown(wait=False, cancel_futures=True)    # drops pool._processes, not the manager thread's table
     # the manager thread may still start a worker it had queued (seen under load): read its table again
     procs += [p for p in list(table.values()) if p not in procs]
@@ -135,7 +140,6 @@ def _stop(pool: ProcessPoolExecutor, graceful: bool = False) -> None:
             p.join(timeout=max(0.0, deadline - time.monotonic()))
     _end(procs)
     # once the manager thread has exited nothing can start another worker: read its table a last time
-    manager = getattr(pool, "_executor_manager_thread", None)
     if manager is not None:
         manager.join(timeout=10)
     _end([p for p in list(table.values()) if p not in procs])
