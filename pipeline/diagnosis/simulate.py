@@ -275,10 +275,8 @@ def _seeded(key, solved) -> np.ndarray:
     carrier, Q = solved
     if _SEEDS is not None:
         _SEEDS[key[2:]] = Q
-        _STATES.pop(key, None)
-        while len(_STATES) >= _CACHE_SIZE:
-            _STATES.pop(next(iter(_STATES)))
-        _STATES[key] = Q
+        _STATES.pop(key, None)              # replaced, not kept: the latest solve's states
+        _cached(_STATES, key, lambda: Q)
         tb = _base_states(key)
         if tb is not None and np.shape(Q) == np.shape(tb[1]):
             _STEPS[(tb[0], key[2:])] = Q - tb[1]
@@ -369,7 +367,6 @@ def simulate_record(te_model: TEModel, case, stiffness, record: BenchRecord,
     condition). points_per_rev: the grid per output revolution (default_points_per_rev)."""
     n = default_points_per_rev(case) if points_per_rev is None else int(points_per_rev)
     cond = record_condition(record)
-    T = record.output_torque_Nm
     if _steady(case, record):
         period = 360.0 * case.ratio                      # input degrees per output revolution
         d = record.direction
