@@ -10,7 +10,7 @@ Seats: each crank's two support-bearing cups (flange side, end-plate side) sit i
 bore's surface over the bearing width is a RIGID RING: every displacement DOF on it follows
 u = t + theta x (x - c) of 6 ring DOFs (c = the bearing centre on the crank axis), imposed by
 master-slave elimination u = T q, K_q = T^T K T. Why: an exact multipoint constraint, no penalty
-to tune and no Lagrange multipliers, so K_q stays symmetric positive definite and one sparse LU
+to tune and no Lagrange multipliers, so K_q stays symmetric positive definite and one sparse Cholesky
 serves every load. Rigid because the hardened cup is press-fitted in the bore (its ovalisation and
 the rollers are the bearing's own compliance). The ring's axial shift and three rotations carry no
 load (a tapered pair carries the crank's tilt as radial forces at its two seats, nothing about the
@@ -47,7 +47,7 @@ from fem import hertz
 from fem.joint_layers import JointLayers, joint_layer_tets, layer_material
 from fem.mesh import (Mesh3D, MeshError, cylinder_band_facets, equal_area_polygon, extruded_tets, inside_convex,
                       tet_mesh_from_solid, triangulate, z_levels)
-from fem.sparse_fe import elasticity_matrix, node_ordered_lu_solve, two_level_pcg  # noqa: F401 (fem.carrier.* kept)
+from fem.sparse_fe import elasticity_matrix, node_ordered_lu_solve, spd_solve
 from geometry.carrier import CarrierGeometry
 
 ARCMIN_PER_RAD = 180 * 60 / math.pi
@@ -63,9 +63,6 @@ RICHARDSON_ORDER = 1.0       # the compliance error's order in h (singular edges
 # cone of M8..M12 output bolts at the interface. Measured: 463 / 2198 N m/arcmin (RV-40E / RV-160N)
 # against 465 / 2211 with the whole face held (-0.5 %): the clamp is not where compliance hides.
 BOLT_ANNULUS_WIDTH = 0.3
-# sparse LU up to here, two-level PCG beyond: measured CPU seconds (2 busy cores), RV-40E case carrier, 12 loads:
-# 41k DOFs LU 11.4, PCG 10.6 (60 iterations); 119k DOFs LU 73, PCG 39 (56); C agrees to 5e-12 of max |C|
-DIRECT_MAX_DOFS = 60_000
 
 
 def default_edge_length_m(g: CarrierGeometry) -> float:
@@ -145,28 +142,6 @@ def carrier_mesh(g: CarrierGeometry, edge_length_m: float | None = None, *,
 
 
 # ----------------------------------------------------------------------------- solver
-def _p1_coarse_space(basis, mesh_sk, T: sp.csr_matrix, keep: np.ndarray, n_rings: int) -> sp.csr_matrix:
-    """Q (q-space x coarse) of the P1 functions that satisfy the rings: coarse unknowns = kept vertex
-    DOFs and ring DOFs; a mid-edge value is the mean of its vertices'. Nested: T Q c is that P1
-    function exactly (a rigid motion is linear, so mid-edge values on a bore stay rigid)."""
-    vd = basis.nodal_dofs.ravel()
-    col_of = np.full(basis.N, -1)
-    col_of[vd] = np.arange(len(vd))
-    ed, ends = basis.edge_dofs, mesh_sk.edges
-    rows = [vd] + [ed[c] for c in range(3) for _ in range(2)]
-    cols = [np.arange(len(vd))] + [col_of[basis.nodal_dofs[c, ends[k]]] for c in range(3) for k in range(2)]
-    vals = [np.ones(len(vd))] + [np.full(ed.shape[1], 0.5)] * 6
-    P = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(basis.N, len(vd)))
-    coarse_col = np.concatenate([np.isin(keep, vd), np.ones(6 * n_rings, bool)])
-    sel = np.flatnonzero(coarse_col)
-    inject = sp.csr_matrix((np.ones(len(sel)), (sel, np.arange(len(sel)))), shape=(T.shape[1], len(sel)))
-    full = (P @ (T[vd] @ inject)).tocsr()
-    ring = sp.csr_matrix((np.ones(6 * n_rings), (np.arange(6 * n_rings), np.arange(len(sel) - 6 * n_rings, len(sel)))),
-                         shape=(6 * n_rings, len(sel)))
-    return sp.vstack([full[keep], ring]).tocsr()
-
-
-# ----------------------------------------------------------------------------- rigid rings
 def seat_facets(msk, g: CarrierGeometry, h: float, crank: int, seat_z_mm: float) -> np.ndarray:
     """Boundary facets of one rigid ring: every vertex on crank's seat bore (equal-area polygons put
     vertices up to 1.3 % outside r; tetwild's envelope is h / 20) and inside the bearing band."""
@@ -247,8 +222,7 @@ class CarrierFE:
     tets: int
     dofs: int                              # after the rings replace the bore DOFs and the clamp
     mesh_seconds: float
-    solve_seconds: float                   # assembly, factorization / PCG, the 4 nc unit loads
-    pcg_iterations: int = 0                # 0: sparse LU
+    solve_seconds: float                   # assembly, factorization, the 4 nc unit loads
     plate_modulus_factor: float = 1.0
     labels: tuple = ()
     extrapolation: dict = field(default_factory=dict)   # levels and order when Richardson-extrapolated
@@ -290,12 +264,12 @@ def seat_forces_per_Nm(crank_angles_rad, crank_circle_radius_m: float, flange_sh
 # ----------------------------------------------------------------------------- the FE model
 def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_length_m: float | None = None,
                        order: int = 2, plate_modulus_factor: float = 1.0, mesher: str = "extruded",
-                       mesh: tuple[Mesh3D, np.ndarray] | None = None, solver: str = "auto",
-                       rtol: float = 1e-10, clamp: str = "face", joints: JointLayers | None = None,
+                       mesh: tuple[Mesh3D, np.ndarray] | None = None, solver: str = "pardiso",
+                       clamp: str = "face", joints: JointLayers | None = None,
                        every_ring_dof: bool = False) -> CarrierFE | np.ndarray:
     """The carrier's seat flexibility on one mesh (see module). plate_modulus_factor multiplies E
-    in both plates (the rigid-plate check); mesh: (tets, regions) made beforehand; solver 'auto'
-    (LU up to DIRECT_MAX_DOFS, else two-level PCG), 'direct' or 'pcg'. clamp: 'face' (the whole
+    in both plates (the rigid-plate check); mesh: (tets, regions) made beforehand; solver 'pardiso'
+    (fem.sparse_fe.spd_solve) or 'superlu' (node_ordered_lu_solve: its independent check). clamp: 'face' (the whole
     mounting face) or 'bolt_annulus' (the what-if of a flange held by its bolts alone). joints:
     contact layers of the pillar joint and the mounting face (JointLayers; None: bonded).
     every_ring_dof: return only the (6 nr, 6 nr) flexibility of every ring DOF (ring order of the
@@ -303,9 +277,9 @@ def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_lengt
     from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, MeshTet
     if order not in (1, 2):
         raise ValueError(f"carrier element order = {order!r}: allowed 1, 2")
-    if solver not in ("auto", "direct", "pcg") or clamp not in ("face", "bolt_annulus"):
-        raise ValueError(f"carrier solver = {solver!r}, clamp = {clamp!r}: allowed solver 'auto', 'direct', "
-                         f"'pcg'; clamp 'face', 'bolt_annulus'")
+    if solver not in ("pardiso", "superlu") or clamp not in ("face", "bolt_annulus"):
+        raise ValueError(f"carrier solver = {solver!r}, clamp = {clamp!r}: allowed solver 'pardiso', 'superlu'; "
+                         f"clamp 'face', 'bolt_annulus'")
     h = edge_length_m or default_edge_length_m(g)
     t0 = time.perf_counter()
     m3, region = mesh if mesh is not None else carrier_mesh(g, h, mesher=mesher)
@@ -349,11 +323,11 @@ def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_lengt
     load = len(keep) + (np.arange(6 * nr) if every_ring_dof else 6 * np.repeat(np.arange(nr), 2) + np.tile([0, 1], nr))
     F = np.zeros((Kq.shape[0], len(load)))
     F[load, np.arange(len(load))] = 1.0
-    if solver == "direct" or order == 1 or (solver == "auto" and Kq.shape[0] <= DIRECT_MAX_DOFS):
+    if solver == "superlu":
         node = np.concatenate([keep // 3, basis.N // 3 + np.repeat(np.arange(nr), 6)])   # skfem interleaves xyz
-        U, its = node_ordered_lu_solve(Kq, node, F), 0
+        U = node_ordered_lu_solve(Kq, node, F)
     else:
-        U, its = two_level_pcg(Kq, _p1_coarse_space(basis, msk, T, keep, nr), F, rtol=rtol)
+        U = spd_solve(Kq, F)
     if every_ring_dof:
         return 0.5 * (U[load] + U[load].T)
     C_raw = U[load]
@@ -375,7 +349,7 @@ def carrier_compliance(g: CarrierGeometry, E_Pa: float, nu: float, *, edge_lengt
     return CarrierFE(0.5 * (C_raw + C_raw.T), np.array(rot), np.array(g.crank_angles_rad()),
                      g.crank_circle_radius_mm * 1e-3, float(np.linalg.norm(C_raw - C_raw.T) / np.linalg.norm(C_raw)),
                      rb_res, float(eq), order, h, len(m3.points), len(m3.tetrahedra), int(Kq.shape[0]), t_mesh,
-                     time.perf_counter() - t0, its, plate_modulus_factor, tuple(labels))
+                     time.perf_counter() - t0, plate_modulus_factor, tuple(labels))
 
 
 def carrier_fe(g: CarrierGeometry, E_Pa: float, nu: float, *, levels=DEFAULT_LEVELS, p: float = RICHARDSON_ORDER,

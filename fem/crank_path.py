@@ -45,7 +45,7 @@ import scipy.sparse as sp
 from fem import carrier as fe_carrier
 from fem import crank_tilt, shaft, tapered_roller
 from fem.mesh import cylinder_band_facets
-from fem.sparse_fe import node_ordered_lu_solve
+from fem.sparse_fe import spd_solve
 from fem.stiffness import seat_transfer
 from geometry.artifacts import InputError
 
@@ -86,8 +86,7 @@ def crank_superelement(case, mesh3, E_Pa: float, nu: float) -> dict:
     if np.abs(Fq[ni:]).max() > 1e-12 * np.abs(Fq).max():
         raise RuntimeError("an eccentric's load zone reaches a journal ring: check the crankshaft layout")
     Kir = Kq[:ni, ni:].toarray()
-    # 16 right-hand sides: one LU (22 s under load) beat fem.shaft's PCG (33 s) here
-    X = node_ordered_lu_solve(Kq[:ni, :ni], keep // 3, np.hstack([Kir, Fq[:ni]]))
+    X = spd_solve(Kq[:ni, :ni], np.hstack([Kir, Fq[:ni]]))
     K_ring = Kq[ni:, ni:].toarray() - Kir.T @ X[:, :12]
     G = (Kir.T @ X[:, 12:]).T
     H = Fq[:ni].T @ X[:, 12:]

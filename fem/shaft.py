@@ -68,35 +68,14 @@ def p2_stiffness(mesh3: Mesh3D, E: float, nu: float):
     return basis, elasticity_matrix(m, ElementTetP2(), basis, E, nu)
 
 
-PCG_RTOL = 1e-12     # residual per load column: the displacements agree with a sparse LU to ~1e-12
-
-
-def _p1_coarse_space(basis, free: np.ndarray) -> sp.csr_matrix:
-    """Q (free DOFs x free vertex DOFs): the P1 functions of the vertices, a mid-edge value the mean
-    of its two vertices' (held DOFs: rows and columns left out, so span(Q) stays in the free space)."""
-    vd = basis.nodal_dofs.ravel()
-    col = np.full(basis.N, -1)
-    col[vd] = np.arange(len(vd))
-    ed, ends = basis.edge_dofs, basis.mesh.edges
-    rows = [vd] + [ed[c] for c in range(3) for _ in range(2)]
-    cols = [np.arange(len(vd))] + [col[basis.nodal_dofs[c, ends[k]]] for c in range(3) for k in range(2)]
-    vals = [np.ones(len(vd))] + [np.full(ed.shape[1], 0.5)] * 6
-    P = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(basis.N, len(vd)))
-    keep = np.setdiff1d(np.arange(len(vd)), col[np.intersect1d(vd, np.setdiff1d(np.arange(basis.N), free))])
-    return P[free][:, keep].tocsr()
-
-
-def held_solve(basis, K: sp.spmatrix, fixed: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """K u = F with u = 0 on `fixed` (K SPD on the rest), P2 basis: conjugate gradients with the
-    two-level P1 preconditioner of fem.sparse_fe.two_level_pcg to PCG_RTOL (measured on the RV-40E
-    crankshaft, 46k DOFs: 40-50 iterations, 5.5x faster than its sparse LU, 8e-13 from it)."""
-    from fem.sparse_fe import two_level_pcg
+def held_solve(K: sp.spmatrix, fixed: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """K u = F with u = 0 on `fixed` (K SPD on the rest), P2 basis: fem.sparse_fe.spd_solve (its
+    test: SuperLU of the same system, tests/test_fem_shaft.py)."""
+    from fem.sparse_fe import spd_solve
     free = np.setdiff1d(np.arange(K.shape[0]), fixed)
     U = np.zeros((K.shape[0],) + np.shape(F)[1:])
     Ff = np.asarray(F, float)[free]
-    sol, _ = two_level_pcg(sp.csr_matrix(K)[free][:, free], _p1_coarse_space(basis, free),
-                           Ff.reshape(len(free), -1), rtol=PCG_RTOL)
-    U[free] = sol.reshape(Ff.shape)
+    U[free] = spd_solve(sp.csr_matrix(K)[free][:, free], Ff.reshape(len(free), -1)).reshape(Ff.shape)
     return U
 
 
@@ -147,7 +126,7 @@ def pinned_solve(basis, K: sp.spmatrix, Cm: sp.spmatrix, F: np.ndarray) -> tuple
     lam = np.linalg.solve(CR.T, R.T @ F)
     G = F - Cm.T @ lam
     fixed = _three_two_one(basis, R)
-    W = held_solve(basis, K, fixed, G)
+    W = held_solve(K, fixed, G)
     reaction = (K @ W - G)[fixed]
     if np.abs(reaction).max() > 1e-8 * np.abs(G).max():
         raise RuntimeError(f"3-2-1 support carries {np.abs(reaction).max():.3g}: the constraints do not hold "
@@ -196,7 +175,7 @@ def _cantilever(m3: Mesh3D, radius_m, length_m, E, nu, F, T) -> dict:
     f_b, fb = _traction(None, mesh, tip, elem, lambda x: np.array([0 * x[0] + F / area, 0 * x[0], 0 * x[0]]))
     J = _polar_moment(mesh, tip, elem)
     f_t, _ = _traction(None, mesh, tip, elem, lambda x: np.array([-T * x[1] / J, T * x[0] / J, 0 * x[0]]))
-    u = held_solve(basis, K, root, np.column_stack([f_b, f_t]))
+    u = held_solve(K, root, np.column_stack([f_b, f_t]))
     xyz = basis.doflocs
     tipd = basis.get_dofs(tip)
     ix, iy = tipd.nodal["u^1"], tipd.nodal["u^2"]
@@ -272,7 +251,7 @@ def extruded_crankshaft_mesh(case, edge_length_m: float) -> Mesh3D:
     h / 2 next to a step growing to h. Minimum angle 10 deg, not Triangle's usual 30: two eccentrics
     cross at 2 asin(e / r_e) (8.8 deg on the RV-160N), an input angle no refinement removes; at 30 deg
     Triangle fans 0.2 mm triangles into each tip, extruded into needles (3D quality 0.007, the
-    crankshaft's PCG 137 iterations); at 10 deg 0.05 and 71. Measured (RV-160N, h = r_j / 2.5):
+    PCG of that time took 137 iterations); at 10 deg 0.05 and 71. Measured (RV-160N, h = r_j / 2.5):
     bending stiffness / stepped beam 0.846, 0.834, 0.828 at h, h / 1.5, h / 2 (monotone, 2 % from
     the finest); pytetwild at h 0.859 (it varies run to run); torsion 0.930..0.932."""
     from geometry.solids import crankshaft_layout
@@ -377,7 +356,7 @@ def crankshaft_stiffness(case, edge_length_m: float | None = None, *,
     T = 10.0
     J = _polar_moment(mesh, face, basis.elem)
     ft, _ = _traction(None, mesh, face, basis.elem, lambda x: np.array([-T * x[1] / J, T * x[0] / J, 0 * x[0]]))
-    ut = held_solve(basis, K, np.concatenate([de.nodal["u^1"], de.nodal["u^2"], de.nodal["u^3"]]), ft)
+    ut = held_solve(K, np.concatenate([de.nodal["u^1"], de.nodal["u^2"], de.nodal["u^3"]]), ft)
     dfc = basis.get_dofs(face)
     ix, iy = dfc.nodal["u^1"], dfc.nodal["u^2"]
     x, y = basis.doflocs[0, ix], basis.doflocs[1, ix]

@@ -143,6 +143,16 @@ def test_the_condensed_seat_flexibility_is_spd_reciprocal_and_rigid_body_consist
         assert spread < 0.03, (j, spread)
 
 
+def test_the_cholesky_solve_equals_superlu_on_the_same_system(geom, coarse):
+    """fem.sparse_fe.spd_solve (MKL PARDISO, every carrier solve) against SuperLU in a node minimum-degree
+    order (node_ordered_lu_solve): two independent factorizations of one system agree to round-off."""
+    lu = fc.carrier_compliance(geom, E, NU, edge_length_m=1.6 * geom.pillar_radius_mm * 1e-3, solver="superlu")
+    C = coarse.compliance_m_per_N
+    assert np.abs(lu.compliance_m_per_N - C).max() < 1e-9 * np.abs(C).max()
+    assert np.abs(lu.plate_rotation_rad_per_N - coarse.plate_rotation_rad_per_N).max() < 1e-9 * np.abs(
+        coarse.plate_rotation_rad_per_N).max()
+
+
 def test_load_at_the_flange_seats_is_stiffer_than_at_the_end_plate_and_racking_follows_the_share(coarse):
     # the flange is bolted down: load at its seats skips the pillars
     c_flange, c_half, c_end = (coarse.torsional_compliance_rad_per_Nm(s) for s in (1.0, 0.5, 0.0))
