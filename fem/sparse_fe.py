@@ -5,6 +5,8 @@ they were first written for the carrier's meshes."""
 from __future__ import annotations
 
 import ctypes
+import functools
+import threading
 
 import numpy as np
 import scipy.sparse as sp
@@ -84,21 +86,21 @@ def spd_solve(K: sp.spmatrix, F: np.ndarray) -> np.ndarray:
     (rv40e-81): the carrier's fine level, 119k DOFs x 12 loads, 4.5 s against 21.9 s by the two-level
     PCG it replaces; the crankshaft interior, 48k x 16, 3.2 s against 16.4 s by node_ordered_lu_solve
     (SuperLU's minimum degree fills 56 M entries where METIS's nested dissection fills far fewer on a 3D
-    mesh). Checked: the residual below SPD_RESIDUAL, else MeshError (a K that is not positive
-    definite: a rigid mode left free)."""
-    import pypardiso
+    mesh). Checked: the normwise backward error below SPD_BACKWARD_ERROR, else MeshError (a K that
+    is not positive definite: a rigid motion left free)."""
+    from pypardiso.pardiso_wrapper import PyPardisoError
     F = np.asarray(F, float)
     A = sp.triu(sp.csr_matrix(K), format="csr")
     A.sort_indices()
-    solver = pypardiso.PyPardisoSolver(mtype=2)
-    _one_thread(solver.libmkl)
-    try:
-        U = solver.solve(A, F)
-    except pypardiso.pardiso_wrapper.PyPardisoError as e:
-        raise MeshError(f"sparse Cholesky failed ({e}): the stiffness is not positive definite (a rigid "
-                        f"motion left unheld?)") from None
-    finally:
-        solver.free_memory(everything=True)
+    solver = _pardiso()
+    with _PARDISO_LOCK:                  # one handle per process: a Dask worker's threads take turns
+        try:
+            U = solver.solve(A, F)
+        except PyPardisoError as e:
+            raise MeshError(f"sparse Cholesky failed ({e}): the stiffness is not positive definite (a rigid "
+                            f"motion left unheld?)") from None
+        finally:
+            solver.free_memory(everything=True)
     U = U.reshape(F.shape)
     K_inf = float(abs(K).sum(axis=1).max())
     err = float(np.abs(K @ U - F).max()) / max(K_inf * float(np.abs(U).max()) + float(np.abs(F).max()), 1e-300)
@@ -108,7 +110,15 @@ def spd_solve(K: sp.spmatrix, F: np.ndarray) -> np.ndarray:
     return U
 
 
-def _one_thread(libmkl) -> None:
-    """MKL on one thread in this process (its default is every core: oversubscribed in the FE pool,
-    and a threaded factorization's sums are ordered by the scheduler)."""
-    libmkl.MKL_Set_Num_Threads(ctypes.c_int(1))
+_PARDISO_LOCK = threading.Lock()
+
+
+@functools.cache
+def _pardiso():
+    """This process' PARDISO handle (each new one searches the environment for MKL: 0.6 s; made once,
+    each solve frees its factors), MKL on one thread (its default is every core:
+    oversubscribed in the FE pool, and a threaded factorization's sums are ordered by the scheduler)."""
+    from pypardiso import PyPardisoSolver
+    solver = PyPardisoSolver(mtype=2)
+    solver.libmkl.MKL_Set_Num_Threads(ctypes.c_int(1))
+    return solver
