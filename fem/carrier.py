@@ -141,7 +141,7 @@ def carrier_mesh(g: CarrierGeometry, edge_length_m: float | None = None, *,
     return m, np.where(zc < 0, END_PLATE, np.where(zc > g.gap_mm, FLANGE, PILLAR))
 
 
-# ----------------------------------------------------------------------------- solver
+# ----------------------------------------------------------------------------- rigid rings
 def seat_facets(msk, g: CarrierGeometry, h: float, crank: int, seat_z_mm: float) -> np.ndarray:
     """Boundary facets of one rigid ring: every vertex on crank's seat bore (equal-area polygons put
     vertices up to 1.3 % outside r; tetwild's envelope is h / 20) and inside the bearing band."""
