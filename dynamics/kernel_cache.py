@@ -75,6 +75,12 @@ class KernelUnit:
         tests fail then, so the fallback cannot go unnoticed)."""
         if fn is None:
             return lambda f: self.kernel(f, inline=inline)
+        src = Path(fn.__code__.co_filename).resolve()
+        if src not in self.sources:
+            # its cache would be stamped with a digest that does not cover its own code: an edit of
+            # it would keep serving the old machine code
+            raise ValueError(f"kernel {fn.__qualname__} is defined in {src}, which is not one of its unit's "
+                             f"sources ({', '.join(p.name for p in self.sources)}): add the file to the unit")
         opts = {"inline": "always"} if inline else {}
         disp = numba.njit(**opts)(fn)
         try:

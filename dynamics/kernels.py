@@ -177,8 +177,60 @@ def static_advance(Q, i0, nominal, shifts, th_in, torque, tol_N, m, w, scale, ma
 
 
 @kernel(inline=True)
-def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, loose):
-    """One HHT-alpha step of size h; returns (q1, v1, a1, fn1, iterations, ok, V, tau)."""
+def _lu_factor(A, piv):
+    """In-place LU with partial pivoting of the square A (L unit lower, U upper), rows swapped as
+    recorded in piv; False if a pivot is zero or not finite. The HHT Jacobian is 30 x 30: LAPACK's
+    gesv through np.linalg.solve spent ~15 us a call on copies, checks and calls, this ~4 us."""
+    n = A.shape[0]
+    for k in range(n):
+        p, big = k, abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > big:
+                p, big = i, abs(A[i, k])
+        if not (big > 0.0 and big < np.inf):
+            return False
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                A[k, j], A[p, j] = A[p, j], A[k, j]
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            lik = A[i, k] * inv
+            A[i, k] = lik
+            if lik != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= lik * A[k, j]
+    return True
+
+
+@kernel(inline=True)
+def _lu_solve(A, piv, b):
+    """x of A x = b from `_lu_factor`'s A and piv (b is overwritten and returned)."""
+    n = A.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            b[k], b[p] = b[p], b[k]
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= A[i, j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= A[i, j] * b[j]
+        b[i] = s / A[i, i]
+    return b
+
+
+@kernel(inline=True)
+def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, piv, loose):
+    """One HHT-alpha step of size h; returns (q1, v1, a1, fn1, iterations, ok, V, tau).
+    Newton on the acceleration; the second iteration reuses the first's factorized Jacobian (a
+    modified-Newton iteration: no tangent assembly, no factorization) since the predictor lands
+    within ~1e-9 m of the step's state, where the tangent barely changes; from the third on, every
+    iteration takes a fresh Jacobian (a contact that opened or closed inside the step)."""
     n = q.shape[0]
     bet = 0.25 * (1.0 + alpha) ** 2
     gam = 0.5 + alpha
@@ -191,15 +243,19 @@ def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter,
     for it in range(max_iter):
         qn = qp + bet * h * h * a
         vn = vp + gam * h * a
-        V, tau, ok = assemble(qn, vn, th1, w1, beta, _YES, m, w, _ALL)
+        fresh = it != 1
+        V, tau, ok = assemble(qn, vn, th1, w1, beta, fresh, m, w, _ALL)
         if not ok:
             return q, v, acc, fn, it + 1, False, 0.0, 0.0
         res = Mdiag * a - (1.0 - alpha) * (f + fext) - alpha * fn
-        for i in range(n):
-            for j in range(n):
-                J[i, j] = (1.0 - alpha) * (gam * h * C[i, j] + bet * h * h * K[i, j])
-            J[i, i] += Mdiag[i]
-        da = np.linalg.solve(J, -res)
+        if fresh:
+            for i in range(n):
+                for j in range(n):
+                    J[i, j] = (1.0 - alpha) * (gam * h * C[i, j] + bet * h * h * K[i, j])
+                J[i, i] += Mdiag[i]
+            if not _lu_factor(J, piv):
+                return q, v, acc, fn, it + 1, False, 0.0, 0.0
+        da = _lu_solve(J, piv, -res)
         if not np.all(np.isfinite(da)):
             return q, v, acc, fn, it + 1, False, 0.0, 0.0
         dq = 0.0
@@ -266,7 +322,7 @@ def _record(si, q, v, V, tau, win, wload, Mdiag, m, w, out, store_force, q_out_o
 
 @kernel(inline=True)
 def _advance(q, v, acc, fn, step, th_arr, th_off, w_arr, T_arr, dt, alpha, beta, m, w, scale, max_iter,
-             tol_m, Mdiag, J):
+             tol_m, Mdiag, J, piv):
     """Step `step` (th_arr[step - 1] -> th_arr[step], less th_off: the periods removed from q); a
     step whose Newton iteration does not converge (contact onset inside the step) is retried as 2,
     4, ... sub-steps (input and load interpolated linearly inside the step). Returns (q, v, acc,
@@ -283,7 +339,7 @@ def _advance(q, v, acc, fn, step, th_arr, th_off, w_arr, T_arr, dt, alpha, beta,
             T1 = T_arr[step - 1] + s1 * (T_arr[step] - T_arr[step - 1])
             qs, vs, as_, fs, its, okk, V, tau = _hht_step(
                 qs, vs, as_, fs, th1, w1, T1, dt / nsub, alpha, beta, m, w, scale, max_iter, tol_m,
-                Mdiag, J, level == SUBSTEP_LEVELS - 1)
+                Mdiag, J, piv, level == SUBSTEP_LEVELS - 1)
             its_all += its
             if not okk:
                 good = False
@@ -312,6 +368,7 @@ def integrate(st, step_from, step_to, th_arr, w_arr, T_arr, dt, stride, alpha, b
     turns = st.counts[2]
     peak = st.peak
     J = np.zeros((n, n))
+    piv = np.zeros(n, np.int64)
     status, last = 0, step_to - 1
     for step in range(step_from, step_to):
         if period > 0.0:
@@ -331,7 +388,7 @@ def integrate(st, step_from, step_to, th_arr, w_arr, T_arr, dt, stride, alpha, b
             p_in0 = tau * w_arr[step - 1]
             p_ld0 = -T_arr[step - 1] * v[m.i_out]
             q, v, acc, fn, V, tau, its, done = _advance(q, v, acc, fn, step, th_arr, th_off, w_arr, T_arr, dt,
-                                                        alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J)
+                                                        alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, piv)
             st.counts[0] += its
             if not done:
                 status, last = 1, step - 1

@@ -242,3 +242,27 @@ def test_a_pin_force_beyond_the_fe_table_ends_the_run_with_that_reason(model):
         model.stiffness, pin_contact=dataclasses.replace(pc, load_N=pc.load_N * 0.05)))
     with pytest.raises(DynamicsError, match="pin-contact table"):
         simulate(short, LoadSpec("sine", 300.0), duration_s=0.05, dt_s=2e-4, store_pin_forces=False)
+
+
+def test_the_newton_lu_solves_as_lapack_does_and_refuses_a_singular_matrix():
+    """The solvers' in-place LU (dynamics.kernels._lu_factor / _lu_solve) against numpy's LAPACK on
+    30 x 30 systems like the HHT Jacobian (mass diagonal plus a stiffness) and on ones that need
+    row exchanges; a singular or non-finite matrix is refused (the step is retried, never solved)."""
+    from dynamics import kernels as kn
+    rng = np.random.default_rng(7)
+    for trial in range(20):
+        A = rng.normal(size=(30, 30))
+        if trial % 2:
+            A += np.diag(rng.uniform(1.0, 1e3, 30))       # diagonally heavy, as M + h^2 K
+        else:
+            A[[0, 5]] = A[[5, 0]] * [[1e-12], [1.0]]      # a tiny leading pivot: row exchanges needed
+        b = rng.normal(size=30)
+        LU, piv = A.copy(), np.zeros(30, np.int64)
+        assert kn._lu_factor(LU, piv)
+        x = kn._lu_solve(LU, piv, b.copy())
+        ref = np.linalg.solve(A, b)
+        assert np.linalg.norm(A @ x - b) <= 1e-12 * np.linalg.norm(A, 1) * np.linalg.norm(x)
+        assert np.allclose(x, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
+    S = rng.normal(size=(30, 30))
+    assert not kn._lu_factor(S.copy() * 0.0, np.zeros(30, np.int64))
+    assert not kn._lu_factor(np.where(np.eye(30) > 0, np.nan, S), np.zeros(30, np.int64))

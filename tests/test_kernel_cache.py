@@ -116,3 +116,21 @@ def test_the_cache_folder_follows_the_environment(monkeypatch, tmp_path, value):
     else:
         assert root == ROOT / "build" / ".kernel-cache"
     assert textwrap.dedent(kernel_cache.__doc__).count(kernel_cache.ENV) == 1
+
+
+def test_a_kernel_outside_its_units_sources_is_refused(tmp_path):
+    """Its cache would carry the unit's digest, which does not cover its code: an edit would keep
+    serving the old machine code (dynamics/losses/contacts.py's kernel was such a case)."""
+    from dynamics.couplings import base
+    from dynamics.kernel_cache import KernelUnit
+    (tmp_path / "inside.py").write_text("def f(x):\n    return x\n")
+
+    def g(x):
+        return x
+    unit = KernelUnit([tmp_path / "inside.py"], root=tmp_path / "cache")
+    with pytest.raises(ValueError, match="not one of its unit's sources"):
+        unit.kernel(g)
+    # every file of the project that defines a unit kernel is in the unit (they imported above)
+    import dynamics.kernels  # noqa: F401
+    import dynamics.losses.contacts  # noqa: F401
+    assert {"contacts.py", "kernels.py", "pin_profile.py"} <= {p.name for p in base.KERNEL_SOURCES}

@@ -16,8 +16,10 @@ import geometry.pin_profile
 from dynamics.kernel_cache import KernelUnit
 
 _HERE = Path(__file__).resolve().parent
-# the compiled unit: coupling kernels, the solvers and the one pin-profile kernel they call
+# the compiled unit: coupling kernels, the solvers, the one pin-profile kernel they call and the
+# losses' pin-frame kernel (every file holding a `kernel`: KernelUnit.kernel refuses any other)
 KERNEL_SOURCES = tuple(sorted(_HERE.glob("*.py"))) + (_HERE.parent / "kernels.py",
+                                                      _HERE.parent / "losses" / "contacts.py",
                                                       Path(geometry.pin_profile.__file__).resolve())
 UNIT = KernelUnit(KERNEL_SOURCES)
 
