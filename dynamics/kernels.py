@@ -62,6 +62,54 @@ class Samples(NamedTuple):
 
 
 @kernel(inline=True)
+def _lu_factor(A, piv):
+    """In-place LU with partial pivoting of the square A (L unit lower, U upper), rows swapped as
+    recorded in piv; False if a pivot is zero or not finite. The Newton matrices here are 30 x 30:
+    LAPACK's gesv through np.linalg.solve spent ~15 us a call on copies, checks and calls, this ~4 us."""
+    n = A.shape[0]
+    for k in range(n):
+        p, big = k, abs(A[k, k])
+        for i in range(k + 1, n):
+            if abs(A[i, k]) > big:
+                p, big = i, abs(A[i, k])
+        if not (big > 0.0 and big < np.inf):
+            return False
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                A[k, j], A[p, j] = A[p, j], A[k, j]
+        inv = 1.0 / A[k, k]
+        for i in range(k + 1, n):
+            lik = A[i, k] * inv
+            A[i, k] = lik
+            if lik != 0.0:
+                for j in range(k + 1, n):
+                    A[i, j] -= lik * A[k, j]
+    return True
+
+
+@kernel(inline=True)
+def _lu_solve(A, piv, b):
+    """x of A x = b from `_lu_factor`'s A and piv (b is overwritten and returned)."""
+    n = A.shape[0]
+    for k in range(n):
+        p = piv[k]
+        if p != k:
+            b[k], b[p] = b[p], b[k]
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= A[i, j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= A[i, j] * b[j]
+        b[i] = s / A[i, i]
+    return b
+
+
+@kernel(inline=True)
 def _static_residual(w, io, torque, scale):
     """Scaled residual of the static balance (internal force + load torque at io) and its 2-norm."""
     rs = w.f.copy()
@@ -84,6 +132,7 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
     w.active[:] = True
     K = w.K
     A = np.empty((n, n))
+    piv = np.zeros(n, np.int64)
     Kc = np.empty((n, n))
     # one assembly call site (each caller links the compiled assembly into its own machine code);
     # the first evaluation is the start, each later one a damped step's trial point
@@ -128,8 +177,10 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
             for j in range(n):
                 A[i, j] = Kc[i, j] / (scale[i] * scale[j])
             A[i, i] += mu
-        dx = np.linalg.solve(A, rs)
-        qn = q + dx / scale
+        if _lu_factor(A, piv):
+            qn = q + _lu_solve(A, piv, rs.copy()) / scale
+        else:                            # not finite: a rejected trial (more damping next)
+            qn = np.full(n, np.nan)
         tries += 1
 
 
@@ -174,54 +225,6 @@ def static_advance(Q, i0, nominal, shifts, th_in, torque, tol_N, m, w, scale, ma
             return i
         Q[i] = q
     return npt
-
-
-@kernel(inline=True)
-def _lu_factor(A, piv):
-    """In-place LU with partial pivoting of the square A (L unit lower, U upper), rows swapped as
-    recorded in piv; False if a pivot is zero or not finite. The HHT Jacobian is 30 x 30: LAPACK's
-    gesv through np.linalg.solve spent ~15 us a call on copies, checks and calls, this ~4 us."""
-    n = A.shape[0]
-    for k in range(n):
-        p, big = k, abs(A[k, k])
-        for i in range(k + 1, n):
-            if abs(A[i, k]) > big:
-                p, big = i, abs(A[i, k])
-        if not (big > 0.0 and big < np.inf):
-            return False
-        piv[k] = p
-        if p != k:
-            for j in range(n):
-                A[k, j], A[p, j] = A[p, j], A[k, j]
-        inv = 1.0 / A[k, k]
-        for i in range(k + 1, n):
-            lik = A[i, k] * inv
-            A[i, k] = lik
-            if lik != 0.0:
-                for j in range(k + 1, n):
-                    A[i, j] -= lik * A[k, j]
-    return True
-
-
-@kernel(inline=True)
-def _lu_solve(A, piv, b):
-    """x of A x = b from `_lu_factor`'s A and piv (b is overwritten and returned)."""
-    n = A.shape[0]
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            b[k], b[p] = b[p], b[k]
-    for i in range(n):
-        s = b[i]
-        for j in range(i):
-            s -= A[i, j] * b[j]
-        b[i] = s
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for j in range(i + 1, n):
-            s -= A[i, j] * b[j]
-        b[i] = s / A[i, i]
-    return b
 
 
 @kernel(inline=True)
