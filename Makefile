@@ -31,8 +31,8 @@ Q ?=
 RUN := $(PY) -m pipeline
 # Stages that do not depend on each other (the cases, and a case's stages after its fem) run two at
 # a time: the serial stages (geometry, hysteresis, fourbar, ...) use one core each, so a second job
-# fills the other. Measured, three cases from a clean build, cold kernel cache: 8:13 with -j2; one
-# after the other took 8:34 with the kernels already compiled. `make JOBS=1` runs one at a time.
+# fills the other. Measured, three cases from a clean build after the install (kernels compiled):
+# 6:48 with -j2 (2026-11-29). `make JOBS=1` runs one at a time.
 JOBS ?= 2
 MAKEFLAGS += --jobs=$(JOBS)
 SCHED := $(if $(SCHEDULER),--scheduler $(SCHEDULER),)
