@@ -184,3 +184,19 @@ def test_an_unknown_crankshaft_mesher_or_an_edge_beyond_the_journal_radius_is_re
         crankshaft_mesh(case, mesher="gmsh")
     with pytest.raises(MeshError, match="the journal radius at most"):
         crankshaft_mesh(case, 1.0)
+
+
+@pytest.mark.slow
+def test_a_model_of_the_fe_stiffness_has_the_numba_types_the_install_compiles(coarse_run):
+    """`make install` compiles the kernels on the closed-form stand-in (tests/warm_kernels.py): that
+    is the machine code the pipeline loads only while a model of the FE stiffness has the same numba
+    types (arrays' dtypes and ranks, the couplings' tuple), housing modes and all."""
+    import numba
+    from dynamics.model import build_model
+    from geometry.params import load_case
+    from tests.support import model_for_tests
+    fe = build_model(load_case(CASES / "rv40e-105.toml"), coarse_run.model)
+    stand_in = model_for_tests("rv40e-105")
+    assert len(fe.arrays.couplings[-1].dof) > 0          # the FE model has its housing modes
+    assert numba.typeof(fe.arrays) == numba.typeof(stand_in.arrays)
+    assert numba.typeof(fe.work()) == numba.typeof(stand_in.work())

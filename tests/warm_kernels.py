@@ -4,7 +4,7 @@ compile (60-90 s a process on the 2-core machine).
 
 numba caches a kernel per argument types, not values: the closed-form test stand-in's model
 (tests/support.py, no FE needed at install time) has the same numba types as a model of any case's
-FE stiffness (checked in tests/test_couplings.py), so the machine code it compiles is what the
+FE stiffness (checked in tests/test_fem_shaft.py on an FE run), so the machine code it compiles is what the
 pipeline loads. Every solver path is called once (time integration, statics, a static path, the
 budget's per-coupling tangents, the contact friction); a kernel of the unit left uncompiled is
 reported (exit 1), so a new solver entry that this script misses cannot go unnoticed.
