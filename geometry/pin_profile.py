@@ -67,6 +67,7 @@ def foot_point(px, py, R, E, zp, t):
     ok = False
     lo, hi = -math.inf, math.inf      # g(lo) < 0 < g(hi) once both are known: a minimum between
     escape = 0.0
+    cx = cy = dx = dy = ddx = ddy = 0.0   # (typed before the loop: numba inlines this function)
     for _ in range(NEWTON_ITER_MAX):
         czt, szt, ct, st = math.cos(zp * t), math.sin(zp * t), math.cos(t), math.sin(t)
         cx, cy = R * ct - E * czt, -R * st + E * szt
@@ -95,15 +96,17 @@ def foot_point(px, py, R, E, zp, t):
         # there (8.4 instead of 3.8 iterations per pin in the dynamics, issue 10 task A)
         if lo > -math.inf and hi < math.inf and not lo <= tn <= hi:
             tn = 0.5 * (lo + hi)
-        step = tn - t
-        t = tn
-        if abs(step) < NEWTON_TOL_RAD:
+        # converged at t: its c, c', c'' just computed are the answer (a step below 1e-14 rad moves
+        # the foot < 1e-15 m), which saves one of ~4 sin/cos sets a pin in the dynamics
+        if abs(tn - t) < NEWTON_TOL_RAD:
             ok = h > 0.0
             break
-    czt, szt, ct, st = math.cos(zp * t), math.sin(zp * t), math.cos(t), math.sin(t)
-    cx, cy = R * ct - E * czt, -R * st + E * szt
-    dx, dy = -R * st + E * zp * szt, -R * ct + E * zp * czt
-    ddx, ddy = -R * ct + E * zp * zp * czt, R * st - E * zp * zp * szt
+        t = tn
+    if not ok:                            # out of iterations, or converged where concave: at the last t
+        czt, szt, ct, st = math.cos(zp * t), math.sin(zp * t), math.cos(t), math.sin(t)
+        cx, cy = R * ct - E * czt, -R * st + E * szt
+        dx, dy = -R * st + E * zp * szt, -R * ct + E * zp * czt
+        ddx, ddy = -R * ct + E * zp * zp * czt, R * st - E * zp * zp * szt
     speed = math.sqrt(dx * dx + dy * dy)
     nx, ny = -dy / speed, dx / speed      # c(t) runs clockwise: its left side is outward
     s = (px - cx) * nx + (py - cy) * ny
