@@ -130,6 +130,7 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
     io = m.i_out
     v = np.zeros(n)
     w.active[:] = True
+    w.foot[:] = 0.0         # each solve from the conjugate seeds: no history between solves
     K = w.K
     A = np.empty((n, n))
     piv = np.zeros(n, np.int64)
@@ -280,6 +281,7 @@ def integrate_start(st, th0, w0, T0, beta, Mdiag, m, w):
     """Initial force and acceleration of a run at rest or in motion from st.q, st.v (every contact
     evaluated); fills st.acc, st.fn, st.sums (potential, input torque) and w."""
     w.active[:] = True
+    w.foot[:] = 0.0         # each solve from the conjugate seeds: no history between solves
     V, tau, ok = assemble(st.q, st.v, th0, w0, beta, _NO, m, w, _ALL)
     st.fn[:] = w.f
     st.fn[m.i_out] -= T0

@@ -115,6 +115,7 @@ def evaluate(model: ReducerModel, q: np.ndarray, input_rad: float, want_k: bool 
     (the filled Work, input torque). Undamped (beta = 0)."""
     w = model.work() if w is None else w
     w.active[:] = True
+    w.foot[:] = 0.0     # from the conjugate seeds: the result does not depend on the Work's history
     _, tau, _ = couplings.assemble(np.asarray(q, float), np.zeros(model.n_dof), float(input_rad), 0.0, 0.0,
                                    bool(want_k), model.arrays, w, couplings.ALL)
     return w, float(tau)

@@ -58,6 +58,8 @@ class Work(NamedTuple):
     force: np.ndarray          # (n_contacts,) their normal force [N]
     active: np.ndarray         # (n_contacts,) bool: evaluated (else known open: force 0)
     out: np.ndarray            # (n_out,) the couplings' named outputs, flat (see Slots)
+    foot: np.ndarray           # (n_contacts,) a contact's last foot-point offset from its seed [rad]
+    #                            (the next solve starts there: one Newton iteration fewer)
 
 
 class Slots:
@@ -103,7 +105,7 @@ def make_work(arrays: ModelArrays, slots: Slots) -> Work:
     n = arrays.n_dof
     return Work(f=np.zeros(n), K=np.zeros((n, n)), C=np.zeros((n, n)), gap=np.zeros(slots.n_contacts),
                 force=np.zeros(slots.n_contacts), active=np.ones(slots.n_contacts, np.bool_),
-                out=np.zeros(slots.n_out))
+                out=np.zeros(slots.n_out), foot=np.zeros(slots.n_contacts))
 
 
 def index_of(name: str) -> int:

@@ -175,7 +175,12 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             # float spacing of t and fails (2e-4 of the calls at 3-5 pi, 9 % beyond 20 pi; issue 12)
             seed = alk - thk
             seed -= 2.0 * math.pi * math.floor(seed / (2.0 * math.pi) + 0.5)
-            t, s, nx, ny, kappa, okk = foot_point(pbx, pby, R, E, zp, seed)
+            # started at the last solve's offset from the conjugate seed (w.foot: microradians of
+            # load, changing by ~1e-12 rad between Newton iterations): the same foot to 1e-14 rad,
+            # one iteration fewer; a stale or bad offset only costs iterations (the Newton is
+            # safeguarded and the offset is dropped where it failed)
+            t, s, nx, ny, kappa, okk = foot_point(pbx, pby, R, E, zp, seed + w.foot[c])
+            w.foot[c] = t - seed if okk and abs(t - seed) < 0.02 else 0.0
             if not okk or abs(s) > GAP_LIMIT_M:
                 ok = False
             gap = s + Rr - rp - dprof
