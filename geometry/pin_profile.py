@@ -39,6 +39,7 @@ NEWTON_STEP_MAX_RAD = 0.02   # limits a Newton step to well inside one tooth (2 
 NEWTON_TOL_RAD = 1e-14
 NEWTON_ESCAPE_RAD = 1e-6     # first downhill step where the distance is concave (doubles while it stays so)
 NEWTON_ITER_MAX = 100
+NEWTON_TAYLOR_MAX_RAD = 1e-6   # largest last step finished by Taylor series (see foot_point)
 
 
 def curve(t, R, E, zp):
@@ -91,6 +92,22 @@ def foot_point(px, py, R, E, zp, t):
             step = NEWTON_STEP_MAX_RAD
         elif step < -NEWTON_STEP_MAX_RAD:
             step = -NEWTON_STEP_MAX_RAD
+        # converged after this step: Newton's quadratic model puts t + step within
+        # |g''| step^2 / (2 h) of the root; below NEWTON_TOL_RAD that is the accuracy the test below
+        # gives, and c, c', c'' at t + step follow from their Taylor series at t (c''' costs no
+        # trigonometry; the truncation, ~E zp^4 step^3 / 6, is < 1e-20 of c'' at |step| <= 1e-6): one
+        # sin/cos set a pin fewer wherever the seed is already close (the dynamics' Newton iterations)
+        if h > 0.0 and abs(step) <= NEWTON_TAYLOR_MAX_RAD and lo < t + step < hi:
+            dddx, dddy = R * st - E * zp * zp * zp * szt, R * ct - E * zp * zp * zp * czt
+            g2 = 3.0 * (dx * ddx + dy * ddy) + rx * dddx + ry * dddy
+            if abs(g2) * step * step < 2.0 * NEWTON_TOL_RAD * h:
+                t += step
+                s2, s3 = 0.5 * step * step, step * step * step / 6.0
+                cx, cy = cx + dx * step + ddx * s2 + dddx * s3, cy + dy * step + ddy * s2 + dddy * s3
+                dx, dy = dx + ddx * step + dddx * s2, dy + ddy * step + dddy * s2
+                ddx, ddy = ddx + dddx * step, ddy + dddy * step
+                ok = True
+                break
         tn = t + step
         # <=: a converged step rounds to tn = t, which is lo or hi itself; strict bounds bisected
         # there (8.4 instead of 3.8 iterations per pin in the dynamics, issue 10 task A)

@@ -112,3 +112,45 @@ def test_profile_is_the_inward_offset_of_the_pin_centre_curve_along_the_kernel_n
         _, s, nx, ny, _, _ = foot_point(cx, cy, R, E, float(zp), t)
         x, y = cycloid_xy(t, R, Rr, E, zp)
         assert abs(s) < 1e-15 and math.hypot(cx - Rr * nx - x, cy - Rr * ny - y) < 1e-12
+
+
+@pytest.mark.parametrize("K1", [0.5, 0.81, 0.95])
+def test_a_seed_near_the_foot_finishes_by_taylor_series_with_one_trig_set_and_the_converged_foot(K1, monkeypatch):
+    """A seed within ~1e-8 rad of the foot: one evaluation of c, c', c'' and the Newton step, then
+    c, c', c'' at the stepped parameter by their Taylor series (geometry.pin_profile.foot_point);
+    the result equals a Newton converged from far (1e-3 rad off, several evaluations) to
+    1e-13 rad in t, 1e-15 m in s and 1e-12 in the normal (its turn over the t difference)."""
+    import geometry.pin_profile as pp
+    zp, R = 40, 64e-3
+    E = K1 * R / zp
+    calls = {"cos": 0}
+
+    class _Counting:
+        def __getattr__(self, name):
+            return getattr(math, name)
+
+        @staticmethod
+        def cos(x):
+            calls["cos"] += 1
+            return math.cos(x)
+    rng = np.random.default_rng(11)
+    taylor = 0
+    for _ in range(40):
+        t0 = rng.uniform(-np.pi, np.pi)
+        cx, cy, dx, dy, _, _ = pp.curve(t0, R, E, zp)
+        sp = math.hypot(dx, dy)
+        gap = rng.uniform(-20e-6, 50e-6)
+        px, py = cx - dy / sp * gap, cy + dx / sp * gap     # on the outward normal of c at t0
+        ref = pp.foot_point(px, py, R, E, zp, t0 + 1e-3)
+        assert ref[5]
+        monkeypatch.setattr(pp, "math", _Counting())
+        calls["cos"] = 0
+        near = pp.foot_point(px, py, R, E, zp, ref[0] + rng.uniform(-1e-8, 1e-8))
+        monkeypatch.setattr(pp, "math", math)
+        assert near[5]
+        taylor += calls["cos"] == 2                         # cos(zp t), cos(t): one set
+        assert abs(near[0] - ref[0]) < 1e-13
+        assert abs(near[1] - ref[1]) < 1e-15
+        assert abs(near[2] - ref[2]) < 1e-12 and abs(near[3] - ref[3]) < 1e-12
+        assert near[4] == pytest.approx(ref[4], rel=1e-9)
+    assert taylor >= 30, f"the Taylor finish took {taylor} of 40 near seeds"
