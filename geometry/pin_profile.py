@@ -95,8 +95,9 @@ def foot_point(px, py, R, E, zp, t):
         # converged after this step: Newton's quadratic model puts t + step within
         # |g''| step^2 / (2 h) of the root; below NEWTON_TOL_RAD that is the accuracy the test below
         # gives, and c, c', c'' at t + step follow from their Taylor series at t (c''' costs no
-        # trigonometry; the truncation, ~E zp^4 step^3 / 6, is < 1e-20 of c'' at |step| <= 1e-6): one
-        # sin/cos set a pin fewer wherever the seed is already close (the dynamics' Newton iterations)
+        # trigonometry; truncated at c'''' ~ E zp^4: at |step| <= 1e-6 < 1e-21 m in c, ~zp^3 step^3
+        # relative in c' and ~zp^2 step^2 / 2 in c'', which feeds only the curvature): one sin/cos
+        # set a pin fewer wherever the seed is already close (the dynamics' Newton iterations)
         if h > 0.0 and abs(step) <= NEWTON_TAYLOR_MAX_RAD and lo < t + step < hi:
             dddx, dddy = R * st - E * zp * zp * zp * szt, R * ct - E * zp * zp * zp * czt
             g2 = 3.0 * (dx * ddx + dy * ddy) + rx * dddx + ry * dddy
