@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from dynamics.couplings import ALL, assemble
+from dynamics.couplings import ALL, assemble, start_solve
 from dynamics.couplings.base import kernel
 
 # candidate contacts in the time integration: a contact more than CANDIDATE_MARGIN_M open at a
@@ -129,8 +129,7 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
     n = q.shape[0]
     io = m.i_out
     v = np.zeros(n)
-    w.active[:] = True
-    w.foot[:] = 0.0         # each solve from the conjugate seeds: no history between solves
+    start_solve(w)
     K = w.K
     A = np.empty((n, n))
     piv = np.zeros(n, np.int64)
@@ -280,8 +279,7 @@ def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter,
 def integrate_start(st, th0, w0, T0, beta, Mdiag, m, w):
     """Initial force and acceleration of a run at rest or in motion from st.q, st.v (every contact
     evaluated); fills st.acc, st.fn, st.sums (potential, input torque) and w."""
-    w.active[:] = True
-    w.foot[:] = 0.0         # each solve from the conjugate seeds: no history between solves
+    start_solve(w)
     V, tau, ok = assemble(st.q, st.v, th0, w0, beta, _NO, m, w, _ALL)
     st.fn[:] = w.f
     st.fn[m.i_out] -= T0

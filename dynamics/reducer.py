@@ -114,8 +114,7 @@ def evaluate(model: ReducerModel, q: np.ndarray, input_rad: float, want_k: bool 
     """Forces (and tangent) of every coupling at rest at state q, every contact evaluated:
     (the filled Work, input torque). Undamped (beta = 0)."""
     w = model.work() if w is None else w
-    w.active[:] = True
-    w.foot[:] = 0.0     # from the conjugate seeds: the result does not depend on the Work's history
+    couplings.start_solve(w)
     _, tau, _ = couplings.assemble(np.asarray(q, float), np.zeros(model.n_dof), float(input_rad), 0.0, 0.0,
                                    bool(want_k), model.arrays, w, couplings.ALL)
     return w, float(tau)

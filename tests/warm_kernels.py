@@ -25,7 +25,7 @@ def warm() -> list[str]:
     import numba
     from dynamics import kernels
     from dynamics.budget import coupling_tangents
-    from dynamics.couplings import assemble, base
+    from dynamics.couplings import assemble, base, start_solve
     from dynamics.loads import LoadSpec
     from dynamics.losses import contacts
     from dynamics.losses.lubricant import Lubricant
@@ -45,7 +45,7 @@ def warm() -> list[str]:
     evaluate(model, q, 0.0, want_k=True)
     coupling_tangents(model, q, 0.0)
     starting_torque_Nm(model, Lubricant.from_section(model.case.lubrication), 40.0)
-    disps = [assemble, contacts._pin_frames] + [getattr(kernels, n) for n in
+    disps = [assemble, start_solve, contacts._pin_frames] + [getattr(kernels, n) for n in
                                                 ("static_solve", "static_seeded", "static_advance",
                                                  "integrate_start", "integrate")]
     assert all(isinstance(d, numba.core.registry.CPUDispatcher) for d in disps)

@@ -141,6 +141,16 @@ ALL = -1        # assemble's `only`: every registered coupling
 
 
 @kernel
+def start_solve(w):
+    """Start a solve on `w`: every contact evaluated, every foot point from its conjugate seed (no
+    Work.foot offset), so no result depends on what the Work solved before (the pool, Dask and
+    in-process runs agree bit for bit). Every solve's start calls it (statics, time integration,
+    evaluate); a new per-solve field of Work is reset here."""
+    w.active[:] = True
+    w.foot[:] = 0.0
+
+
+@kernel
 def assemble(q, v, th_in, w_in, beta, want_k, m, w, only):
     """Internal generalized force w.f (on the system), tangent w.K = -df/dq and damping
     w.C = -df/dv (when want_k) of every coupling (only = ALL) or of the one at registry index
