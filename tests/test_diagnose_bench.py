@@ -57,7 +57,11 @@ def _records(effects, seed, torque_fractions=(0.03, 0.3, 0.6)):
 # Known failures (measured 2026-11-27 on issue-23b, RV-40E stand-in with its housing mode and joints):
 # crank_eccentricity_error seed 1 is named right but its single journal comes back off the drawn
 # -6.16 um (2.29 um; -0.61 um after the fit changes below): the fit lands on another member of the
-# crank pattern family. Open work of issue 23, not silenced by a tolerance.
+# crank pattern family. Open work of issue 23, not silenced by a tolerance. Measured again 2026-11-29
+# (main 8a61dc7): named right, gain 0.918, held-out 0.914, single journal -6.87 um (11.5 % off the
+# drawn -6.16, the test allows 10 %), the rest spread over the other cranks (0.25, 0.47 um) and the
+# eccentric-phase pattern (0.44 um): issue 23's "named right with gain >= 0.6" holds here, the size
+# does not.
 # pin_ring_pattern seeds 0/1 (named backlash first until issue 23's fit changes, extension.py:
 # backlash's column re-taken beside the pattern's, refits warm-started, a fit still improving
 # significantly at its budget goes on) now pass: the joint fit reaches the pattern alone, the other
