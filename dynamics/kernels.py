@@ -122,8 +122,9 @@ def _static_residual(w, io, torque, scale):
 def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
     """Static equilibrium: minimise the potential Pi = V(q) + torque q_out (frictionless couplings
     are conservative) by a Levenberg-Marquardt-damped Newton in scaled coordinates x = scale q
-    (metres). Every contact is evaluated. Free play (backlash) is crossed by the damped steps. A
-    step is accepted when Pi falls by more than its consistency error (PI_RTOL) or the residual
+    (metres), its matrix the exact tangent K + K_rest (couplings.Work; dynamics.couplings.pin).
+    Every contact is evaluated. Free play (backlash) is crossed by the damped steps. A step is
+    accepted when Pi falls by more than its consistency error (PI_RTOL) or the residual
     norm falls. Returns (q, iterations, status 0 = converged, 1 = iteration limit, 2 = no
     acceptable step)."""
     n = q.shape[0]
@@ -151,6 +152,7 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
                 dmax = max(dmax, K[i, i] / scale[i] ** 2)
             mu = 1e-6 * dmax + 1.0
             Kc[:, :] = w.K
+            Kc += w.K_rest               # the exact tangent (couplings.Work.K_rest)
         # merit: Pi far from equilibrium (crosses free play, where the residual stays T), the
         # residual near it: the pin law's k(phase) is not differentiated in f, so Pi is only a
         # potential of f to ~1e-9 relative and a Pi-only test stalls (measured: rv40e-105 at 1 deg)
@@ -158,6 +160,7 @@ def static_solve(q, th_in, torque, m, w, scale, max_iter, tol_N):
             q, rs, Pi, norm2 = qn, rsn, Pin, nn2
             norm = np.max(np.abs(rsn))
             Kc[:, :] = w.K
+            Kc += w.K_rest
             mu = max(mu / 10.0, 1e-9)
             it += 1
         else:

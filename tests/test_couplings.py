@@ -59,10 +59,12 @@ def test_the_assembler_is_the_sum_of_the_registered_couplings(loaded):
 
 
 # Tangent -df/dq against central differences (scaled: rotations as N m / ROT_SCALE_M), per coupling.
-# Left out of the tangents on purpose (Newton converges without them): force x curvature terms
-# (pin: profile curvature; needle: the turning arms of seat, eccentric and hole) and the mesh's
-# d k_s/ds terms (zero away from the single/double contact edges, as here). Measured on this state
-# (largest error / largest entry): mesh 1e-10, support 3e-10, needle 1.2e-6, pin 3.4e-4.
+# Left out of K on purpose (the symmetric tangent of the budget, the eigenfrequencies and the time
+# integration, whose Newton converges without them): force x curvature terms (pin: profile
+# curvature; needle: the turning arms of seat, eccentric and hole) and the mesh's d k_s/ds terms
+# (zero away from the single/double contact edges, as here). Measured on this state (largest error /
+# largest entry): mesh 1e-10, support 3e-10, needle 1.2e-6, pin 3.4e-4. The pin's two (its
+# curvature and its law's phase) are in Work.K_rest for the statics: test below.
 TANGENT_RTOL = {"mesh": 1e-6, "support": 1e-6, "needle": 1e-5, "pin": 1e-3, "housing": 1e-6}
 # f = -dV/dq: exact but for the pin law's k(phase), which is not differentiated. Measured: mesh,
 # support 1e-10, needle 4e-8 (round-off of V), pin 1.7e-4 of the largest force; housing: linear springs.
@@ -86,6 +88,40 @@ def test_each_coupling_tangent_matches_finite_differences_of_its_force(loaded, n
     scale = np.abs(S @ K @ S).max()
     assert scale > 0
     assert np.abs(S @ (K - Kfd) @ S).max() < TANGENT_RTOL[name] * scale
+
+
+def _fd_tangent(model, only, q, th, h=1e-10):
+    """-df/dq by central differences (steps of h metres, scaled) of the coupling `only` at rest at q.
+    Their own error is ~h^2 (pins of the stand-in at 300 N m: 7e-6, 6e-7, 1.2e-7 of the largest
+    entry at h = 1e-9, 3e-10, 1e-10 m)."""
+    z = np.zeros(model.n_dof)
+    Kfd = np.zeros((model.n_dof, model.n_dof))
+    for j in range(model.n_dof):
+        e = np.zeros(model.n_dof)
+        e[j] = h / model.scale[j]
+        Kfd[:, j] = -(_eval(model, only, q + e, z, th, want_k=False)[0].f
+                      - _eval(model, only, q - e, z, th, want_k=False)[0].f) / (2 * e[j])
+    return Kfd
+
+
+@pytest.mark.parametrize("torque", [30.0, 300.0])
+def test_the_statics_tangent_of_the_pins_is_exact(torque):
+    """K + K_rest (the statics' Newton matrix: the pin law's phase part and the force x gap-Hessian
+    part added, kernels.static_solve) is -df/dq to the differences' own error, where K alone misses
+    by ~3e-4 of its largest entry; the time integration (beta > 0) leaves K_rest empty."""
+    model = model_for_tests("rv40e-81")
+    s = solve_static(model, 10.0, torque)
+    only, th = _alone(model, "pin"), math.radians(s.input_angle_deg)
+    assert np.abs(s.pin_gap_m).min() > 1e-9          # no contact within the steps' reach of its onset
+    w = _eval(model, only, s.q, np.zeros(model.n_dof), th)[0]
+    Kfd = _fd_tangent(model, only, s.q, th)
+    S = np.diag(1 / model.scale)
+    scale = np.abs(S @ Kfd @ S).max()
+    assert np.abs(S @ (w.K + w.K_rest - Kfd) @ S).max() < 1e-6 * scale
+    assert np.abs(S @ (w.K - Kfd) @ S).max() > 5e-5 * scale           # what K_rest adds is not noise
+    assert not np.allclose(w.K_rest, w.K_rest.T)                        # the law's phase part: not symmetric
+    wd = _eval(model, only, s.q, np.zeros(model.n_dof), th, beta=1e-5)[0]
+    assert not wd.K_rest.any()
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -235,9 +271,17 @@ def test_a_signal_handler_acts_within_a_second_during_a_long_simulation():
 def test_the_one_search_interpolation_of_a_law_table_is_np_interp_of_both_columns():
     law = np.column_stack([np.linspace(0.0, 180.0, 19), np.linspace(1e9, 3e9, 19) ** 1.1, np.linspace(1.1, 1.4, 19)])
     for x in np.concatenate([[-5.0, 0.0, 180.0, 200.0], np.random.default_rng(0).uniform(0.0, 180.0, 50)]):
-        k, n = base.interp2(x, law)
+        k, n, dk, dn = base.interp2(x, law)
         assert k == pytest.approx(np.interp(x, law[:, 0], law[:, 1]), rel=1e-14)
         assert n == pytest.approx(np.interp(x, law[:, 0], law[:, 2]), rel=1e-14)
+        # the slopes: the segment's (0 where clamped), as a difference within the segment gives them
+        h = 1e-3
+        for col, d in ((1, dk), (2, dn)):
+            fd = (np.interp(x + h, law[:, 0], law[:, col]) - np.interp(x - h, law[:, 0], law[:, col])) / (2 * h)
+            if x < 0.0 or x > 180.0:
+                assert d == 0.0
+            elif min(abs(x - law[:, 0])) > h:
+                assert d == pytest.approx(fd, rel=1e-6)
 
 
 def test_the_assembly_of_a_model_compiles_once_for_every_solver():

@@ -60,6 +60,12 @@ class Work(NamedTuple):
     out: np.ndarray            # (n_out,) the couplings' named outputs, flat (see Slots)
     foot: np.ndarray           # (n_contacts,) a contact's last foot-point offset from its seed [rad]
     #                            (the next solve starts there: one Newton iteration fewer)
+    K_rest: np.ndarray         # (n, n) the rest of the pins' -df/dq, filled when want_k at beta = 0 (the
+    #                            statics' assemblies): the law's phase part (its k and n depend on the
+    #                            pin's phase from the disc's line of centres, which the centre moves; not
+    #                            symmetric) and the geometric part (the force times the gap's Hessian);
+    #                            kept out of K, the tangent the budget, the eigenfrequencies and the time
+    #                            integration use; the statics' Newton adds it (an exact tangent)
 
 
 class Slots:
@@ -105,7 +111,7 @@ def make_work(arrays: ModelArrays, slots: Slots) -> Work:
     n = arrays.n_dof
     return Work(f=np.zeros(n), K=np.zeros((n, n)), C=np.zeros((n, n)), gap=np.zeros(slots.n_contacts),
                 force=np.zeros(slots.n_contacts), active=np.ones(slots.n_contacts, np.bool_),
-                out=np.zeros(slots.n_out), foot=np.zeros(slots.n_contacts))
+                out=np.zeros(slots.n_out), foot=np.zeros(slots.n_contacts), K_rest=np.zeros((n, n)))
 
 
 def index_of(name: str) -> int:
@@ -162,6 +168,8 @@ def assemble(q, v, th_in, w_in, beta, want_k, m, w, only):
     if want_k:
         w.K[:, :] = 0.0
         w.C[:, :] = 0.0
+        if beta == 0.0:
+            w.K_rest[:, :] = 0.0
     V = 0.0
     tau_in = 0.0
     ok = True

@@ -55,12 +55,13 @@ def ramp(x):
 @kernel(inline=True)
 def interp2(x, table):
     """np.interp of columns 1 and 2 of `table` over its column 0 at one point (clamped at the
-    ends), by bisection: one search for both (a law's k and n)."""
+    ends), by bisection: one search for both (a law's k and n); with their slopes d/dx (0 where
+    clamped): (k, n, dk/dx, dn/dx)."""
     n = table.shape[0]
     if x <= table[0, 0]:
-        return table[0, 1], table[0, 2]
+        return table[0, 1], table[0, 2], 0.0, 0.0
     if x >= table[n - 1, 0]:
-        return table[n - 1, 1], table[n - 1, 2]
+        return table[n - 1, 1], table[n - 1, 2], 0.0, 0.0
     lo, hi = 0, n - 1
     while hi - lo > 1:
         mid = (lo + hi) // 2
@@ -68,8 +69,10 @@ def interp2(x, table):
             lo = mid
         else:
             hi = mid
-    w = (x - table[lo, 0]) / (table[hi, 0] - table[lo, 0])
-    return table[lo, 1] * (1.0 - w) + table[hi, 1] * w, table[lo, 2] * (1.0 - w) + table[hi, 2] * w
+    span = table[hi, 0] - table[lo, 0]
+    w = (x - table[lo, 0]) / span
+    return (table[lo, 1] * (1.0 - w) + table[hi, 1] * w, table[lo, 2] * (1.0 - w) + table[hi, 2] * w,
+            (table[hi, 1] - table[lo, 1]) / span, (table[hi, 2] - table[lo, 2]) / span)
 
 
 foot_point = kernel(geometry.pin_profile.foot_point, inline=True)   # the one pin-to-profile kernel

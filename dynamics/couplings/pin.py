@@ -8,9 +8,19 @@ alpha_d - theta_k, microradians off under load: 2-3 iterations, never the neighb
 gap = s + Rr - r_k (s the signed distance from c along the outward normal); approach = -gap.
 Law (fem.stiffness.pin_law: the tooth-pair FE with the disc body and the pin's housing groove in
 series, refitted; by pin phase from the line of centres, interpolated): F = k(phase) approach^n, V = k approach^(n+1) / (n+1); the law's phase dependence is not
-differentiated (f departs from -grad V by ~2e-4 of the largest force at 300 N m,
-tests/test_couplings.py), nor is the profile curvature in the tangent. Damping beta k_t g', ramped in over
-DAMP_RAMP_M of approach; a damped contact cannot pull (force clipped at 0).
+differentiated in f (f departs from -grad V by ~2e-4 of the largest force at 300 N m,
+tests/test_couplings.py). Tangent: K = k_t g g^T (symmetric: the budget, the eigenfrequencies and
+the time integration use it); the rest of -df/dq, the law's phase part g dF/dphase dphase/dq
+(the disc centre turns the line of centres) and the geometric part -F d2gap/dq2 (the profile's
+curvature kappa / (1 + kappa s) along the tangent and the frame's rotation), goes to Work.K_rest
+at beta = 0, where the statics' Newton adds it: K + K_rest is -df/dq to the differences' own
+error (tests/test_couplings.py), K alone to ~3e-4 of its largest entry. What it buys is small:
+the fit's static points took 3.0 accepted Newton steps instead of 3.17 (48 sampled points of
+the real records' diagnosis), whose run went 112.8 -> 105.7 s on one worker (two paired runs
+each, this machine's noise ~6 %); the steps end at the residual floor the foot point's 1e-14 rad
+sets (~1e-7 N, just under the statics' tolerance), not at the tangent.
+Damping beta k_t g', ramped in over DAMP_RAMP_M of approach; a damped contact cannot pull (force
+clipped at 0).
 The contacts are the work's candidate contacts: the time integration skips pins found open by
 more than a margin (dynamics.kernels.CANDIDATE_MARGIN_M); w.gap / w.force hold gap and force.
 As-built errors (case.errors, geometry.params.Errors), all through this same gap and law:
@@ -123,7 +133,8 @@ def _series_approach(app, kk, nn, sk):
 def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     """Coupling interface (see dynamics.couplings); only the contacts with w.active are
     evaluated (the others are known open: force 0, gap left as it was)."""
-    f, K, C, active, gaps, forces = w.f, w.K, w.C, w.active, w.gap, w.force
+    f, K, C, active, gaps, forces, Kr = w.f, w.K, w.C, w.active, w.gap, w.force, w.K_rest
+    rest = want_k and beta == 0.0       # the statics' exact tangent (Work.K_rest)
     R, Rr, E, zp = p.R_m, p.Rr_m, p.E_m, p.zp
     law, pins, dof = p.law, p.pins, p.dof
     npin = pins.shape[0]
@@ -134,6 +145,7 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
     # blocks are summed here (same contacts, same order: the same bits as summing into K directly)
     # and added once at the end, no allocation per contact (no measurable change of `make bench`)
     gh = np.empty(nh)                   # the gap's gradient on the housing modes
+    tjh = np.empty(nh)                  # the tangent's component of the pin's motion per housing mode
     Khh, Chh = np.zeros((nh, nh)), np.zeros((nh, nh))
     ndisc = dof.shape[0]
     Kdh, Cdh = np.zeros((ndisc, 3, nh)), np.zeros((ndisc, 3, nh))
@@ -148,6 +160,9 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
         cx, cy, al = q[ix], q[iy], q[ia] + p.disc_rotation_rad[d]
         ca0, sa0 = math.cos(al), math.sin(al)
         psi = math.atan2(cy, cx)
+        # d(phase)/d(centre) [deg/m] without its sign (the fold below): psi turns as the centre moves
+        r2 = max(cx * cx + cy * cy, 1e-30)
+        dph_x, dph_y = (180.0 / math.pi) * cy / r2, -(180.0 / math.pi) * cx / r2
         npitch, nprof = p.disc_pitch.shape[1], p.disc_profile_lobes.shape[1]
         for k in range(npin):
             c = p.c0 + d * npin + k
@@ -191,9 +206,12 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             ngx, ngy = ca * nx - sa * ny, sa * nx + ca * ny
             g_x, g_y, g_a = -ngx, -ngy, -(wx * ngy - wy * ngx)
             ph = (thk - psi) * 180.0 / math.pi
-            ph = abs(ph - 360.0 * math.floor((ph + 180.0) / 360.0))
-            kk, nn = interp2(ph, law)
+            ph -= 360.0 * math.floor((ph + 180.0) / 360.0)
+            sgn = 1.0 if ph >= 0.0 else -1.0
+            ph = abs(ph)
+            kk, nn, dk, dn = interp2(ph, law)
             kk *= pins[k, 4]
+            dk *= pins[k, 4]
             app = -gap
             sk = pins[k, 5]
             if sk > 0.0:                     # a softer seat in series: app = dc + sk F(dc)
@@ -202,10 +220,13 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
                 ktc = nn * kk * max(dc, 1e-10) ** (nn - 1.0)
                 kt = ktc / (1.0 + sk * ktc)
                 Vc = kk * dc ** (nn + 1.0) / (nn + 1.0) + 0.5 * sk * F * F
+                # dF/d(phase) at fixed approach: dF = (dc^n dk + F ln(dc) dn) / (1 + sk ktc)
+                dFph = F * (dk / kk + math.log(max(dc, 1e-300)) * dn) / (1.0 + sk * ktc) if rest else 0.0
             else:
                 F = kk * app ** nn
                 kt = nn * kk * max(app, 1e-10) ** (nn - 1.0)
                 Vc = kk * app ** (nn + 1.0) / (nn + 1.0)
+                dFph = F * (dk / kk + math.log(app) * dn) if rest else 0.0
             gd = g_x * v[ix] + g_y * v[iy] + g_a * v[ia]
             for i in range(nh):              # the seat moves with the housing: d gap = n . d(seat)
                 gd += (ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]) * v[hdof[i]]
@@ -226,6 +247,40 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
                         K[ii[c1], ii[c2]] += kt * gg[c1] * gg[c2]
                         if damp:
                             C[ii[c1], ii[c2]] += beta * rmp * kt * gg[c1] * gg[c2]
+            if rest and damp:
+                # K_rest = -g dF/dph dph/dq (phase) - F d2gap/dq2 (geometric) over (cx, cy, rot, housing
+                # modes): gap = s(pb), pb = R(al)^T (P - c) the pin centre in the disc frame; d2s/dpb2 =
+                # kappa / (1 + kappa s) t t^T (t the unit tangent); d2pb/dal2 = -pb, d2pb/dc dal from dR^T/dal
+                ex, ey = sgn * dFph * dph_x, sgn * dFph * dph_y
+                for c1 in range(3):
+                    Kr[ii[c1], ix] -= gg[c1] * ex
+                    Kr[ii[c1], iy] -= gg[c1] * ey
+                tx, ty = -ny, nx
+                hts = Ft * kappa / (1.0 + kappa * s)
+                tj = (-tx * ca + ty * sa, -tx * sa - ty * ca, tx * pby - ty * pbx)
+                na = (nx * sa + ny * ca, -nx * ca + ny * sa, -(nx * pbx + ny * pby))
+                for c1 in range(3):
+                    for c2 in range(3):
+                        Kr[ii[c1], ii[c2]] -= hts * tj[c1] * tj[c2]
+                    Kr[ii[c1], ia] -= Ft * na[c1]
+                    if c1 < 2:
+                        Kr[ia, ii[c1]] -= Ft * na[c1]
+                for i in range(nh):          # the seat moves with the housing: P = pin + phi q_h
+                    fx, fy = hphi[k, 0, i], hphi[k, 1, i]
+                    tjh[i] = tx * (ca * fx + sa * fy) + ty * (-sa * fx + ca * fy)
+                for i in range(nh):
+                    fx, fy = hphi[k, 0, i], hphi[k, 1, i]
+                    ghi = ngx * fx + ngy * fy
+                    nah = nx * (-sa * fx + ca * fy) + ny * (-ca * fx - sa * fy)
+                    Kr[hdof[i], ix] -= ghi * ex
+                    Kr[hdof[i], iy] -= ghi * ey
+                    for c2 in range(3):
+                        Kr[hdof[i], ii[c2]] -= hts * tjh[i] * tj[c2]
+                        Kr[ii[c2], hdof[i]] -= hts * tj[c2] * tjh[i]
+                    Kr[hdof[i], ia] -= Ft * nah
+                    Kr[ia, hdof[i]] -= Ft * nah
+                    for i2 in range(nh):
+                        Kr[hdof[i], hdof[i2]] -= hts * tjh[i] * tjh[i2]
             if nh == 0:
                 continue
             for i in range(nh):              # the gap's gradient on the housing modes
