@@ -227,9 +227,11 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
                 kt = nn * kk * max(app, 1e-10) ** (nn - 1.0)
                 Vc = kk * app ** (nn + 1.0) / (nn + 1.0)
                 dFph = F * (dk / kk + math.log(app) * dn) if rest else 0.0
+            for i in range(nh):              # the gap's gradient on the housing modes: d gap = n . d(seat)
+                gh[i] = ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]
             gd = g_x * v[ix] + g_y * v[iy] + g_a * v[ia]
-            for i in range(nh):              # the seat moves with the housing: d gap = n . d(seat)
-                gd += (ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]) * v[hdof[i]]
+            for i in range(nh):
+                gd += gh[i] * v[hdof[i]]
             rmp = ramp(app)
             Ft = F - beta * rmp * kt * gd
             if Ft < 0.0:
@@ -270,10 +272,9 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
                     tjh[i] = tx * (ca * fx + sa * fy) + ty * (-sa * fx + ca * fy)
                 for i in range(nh):
                     fx, fy = hphi[k, 0, i], hphi[k, 1, i]
-                    ghi = ngx * fx + ngy * fy
                     nah = nx * (-sa * fx + ca * fy) + ny * (-ca * fx - sa * fy)
-                    Kr[hdof[i], ix] -= ghi * ex
-                    Kr[hdof[i], iy] -= ghi * ey
+                    Kr[hdof[i], ix] -= gh[i] * ex
+                    Kr[hdof[i], iy] -= gh[i] * ey
                     for c2 in range(3):
                         Kr[hdof[i], ii[c2]] -= hts * tjh[i] * tj[c2]
                         Kr[ii[c2], hdof[i]] -= hts * tj[c2] * tjh[i]
@@ -283,8 +284,7 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
                         Kr[hdof[i], hdof[i2]] -= hts * tjh[i] * tjh[i2]
             if nh == 0:
                 continue
-            for i in range(nh):              # the gap's gradient on the housing modes
-                gh[i] = ngx * hphi[k, 0, i] + ngy * hphi[k, 1, i]
+            for i in range(nh):
                 f[hdof[i]] += Ft * gh[i]
             if want_k:                       # ... and over (disc, housing modes)
                 for c1 in range(3):
