@@ -54,6 +54,9 @@ class RunState(NamedTuple):
     counts: np.ndarray         # (3,) int: Newton iterations, contacts missed by the candidate set,
                                #   whole mechanism periods removed from q (see the module doc)
     peak: np.ndarray           # (n_contacts,) largest contact force of the run so far [N]
+    newton: np.ndarray         # (3,) the HHT Newton's last measured contraction (_hht_step), the
+                               #   closed-contact signature of the last step's first iterate, and
+                               #   1.0 where unconfirmed steps are allowed (0: every step confirmed)
 
 
 class Samples(NamedTuple):
@@ -249,12 +252,16 @@ def static_advance(Q, i0, nominal, shifts, th_in, torque, tol_N, m, w, scale, ma
 
 
 @kernel(inline=True)
-def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, piv, loose):
+def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, piv, loose,
+              confirm, newton):
     """One HHT-alpha step of size h; returns (q1, v1, a1, fn1, iterations, ok, V, tau).
     Newton on the acceleration; the second iteration reuses the first's factorized Jacobian (a
     modified-Newton iteration: no tangent assembly, no factorization) since the predictor lands
     within ~1e-9 m of the step's state, where the tangent barely changes; from the third on, every
-    iteration takes a fresh Jacobian (a contact that opened or closed inside the step)."""
+    iteration takes a fresh Jacobian (a contact that opened or closed inside the step).
+    Unless `confirm` (or newton[2] == 0), the first correction is taken without the second
+    iteration's assembly where the contraction newton[0] last measured bounds what it leaves below
+    tol_m and the predictor closes the same contacts as the last step's did (newton[1])."""
     n = q.shape[0]
     bet = 0.25 * (1.0 + alpha) ** 2
     gam = 0.5 + alpha
@@ -264,6 +271,7 @@ def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter,
     fext = np.zeros(n)
     fext[m.i_out] = -T1
     f, K, C = w.f, w.K, w.C       # locals: no struct access inside the loops
+    d0 = 0.0
     for it in range(max_iter):
         qn = qp + bet * h * h * a
         vn = vp + gam * h * a
@@ -271,6 +279,14 @@ def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter,
         V, tau, ok = assemble(qn, vn, th1, w1, beta, fresh, m, w, _ALL)
         if not ok:
             return q, v, acc, fn, it + 1, False, 0.0, 0.0
+        if it == 0:                      # which contacts are closed at the predictor
+            sig = 0.0
+            for c in range(w.force.shape[0]):
+                if w.force[c] > 0.0:
+                    sig += c + 1.0
+            if sig != newton[1]:
+                confirm = True           # a contact closed or opened since the last step
+            newton[1] = sig
         res = Mdiag * a - (1.0 - alpha) * (f + fext) - alpha * fn
         if fresh:
             for i in range(n):
@@ -290,8 +306,25 @@ def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter,
         # their own (one of ~3.1 a step). Last resort (finest sub-step): a Newton limit cycle at a
         # contact kink is accepted once its corrections fall below 100 tol (1e-9 m); counted in the
         # iteration statistics
+        if it == 1:
+            newton[0] = dq / d0 if d0 > 0.0 else 1.0
         if dq < tol_m or (loose and it >= max_iter // 2 and dq < 100.0 * tol_m):
             return qn, vn, a, f + fext, it + 1, True, V, tau
+        if it == 0:
+            d0 = dq
+            theta = newton[0]
+            # unconfirmed step: the correction is applied without the assembly that would confirm
+            # it where the contraction last measured (theta = dq1 / dq0 of a confirmed step, the
+            # same contact set) bounds the error left, dq theta / (1 - theta), below tol_m: the
+            # criterion a confirmed step applies, predicted. Force at the new state from the
+            # tangent (K, C of this iterate); energy, input torque and contact forces stay this
+            # iterate's (O(dq) off; every sample step is confirmed, so the records are exact)
+            if not confirm and newton[2] > 0.0 and theta < 0.5 and dq * theta / (1.0 - theta) < tol_m:
+                a += da
+                dqv = bet * h * h * da
+                dvv = gam * h * da
+                f1 = f + fext - K @ dqv - C @ dvv
+                return qp + bet * h * h * a, vp + gam * h * a, a, f1, 1, True, V, tau
         a += da
     return q, v, acc, fn, max_iter, False, 0.0, 0.0
 
@@ -346,7 +379,7 @@ def _record(si, q, v, V, tau, win, wload, Mdiag, m, w, out, store_force, q_out_o
 
 @kernel(inline=True)
 def _advance(q, v, acc, fn, step, th_arr, th_off, w_arr, T_arr, dt, alpha, beta, m, w, scale, max_iter,
-             tol_m, Mdiag, J, piv):
+             tol_m, Mdiag, J, piv, confirm, newton):
     """Step `step` (th_arr[step - 1] -> th_arr[step], less th_off: the periods removed from q); a
     step whose Newton iteration does not converge (contact onset inside the step) is retried as 2,
     4, ... sub-steps (input and load interpolated linearly inside the step). Returns (q, v, acc,
@@ -363,7 +396,7 @@ def _advance(q, v, acc, fn, step, th_arr, th_off, w_arr, T_arr, dt, alpha, beta,
             T1 = T_arr[step - 1] + s1 * (T_arr[step] - T_arr[step - 1])
             qs, vs, as_, fs, its, okk, V, tau = _hht_step(
                 qs, vs, as_, fs, th1, w1, T1, dt / nsub, alpha, beta, m, w, scale, max_iter, tol_m,
-                Mdiag, J, piv, level == SUBSTEP_LEVELS - 1)
+                Mdiag, J, piv, level == SUBSTEP_LEVELS - 1, confirm or level > 0, newton)
             its_all += its
             if not okk:
                 good = False
@@ -376,7 +409,7 @@ def _advance(q, v, acc, fn, step, th_arr, th_off, w_arr, T_arr, dt, alpha, beta,
 @kernel
 def integrate(st, step_from, step_to, th_arr, w_arr, T_arr, dt, stride, alpha, beta, m, w, scale,
               max_iter, tol_m, Mdiag, out, store_force, shift, period):
-    """HHT-alpha (alpha in [0, 1/3]; 0 = trapezoidal rule) with a full Newton per step, steps
+    """HHT-alpha (alpha in [0, 1/3]; 0 = trapezoidal rule) with a Newton per step (_hht_step), steps
     step_from .. step_to - 1 of a run whose step n goes from th_arr[n - 1] to th_arr[n] (step 0:
     the start, recorded only; `integrate_start` first). Samples every `stride` steps into `out`.
     Only candidate contacts enter the Newton iterations (see CANDIDATE_MARGIN_M), refreshed every
@@ -411,8 +444,10 @@ def integrate(st, step_from, step_to, th_arr, w_arr, T_arr, dt, stride, alpha, b
         if step > 0:
             p_in0 = tau * w_arr[step - 1]
             p_ld0 = -T_arr[step - 1] * v[m.i_out]
+            confirm = step % stride == 0 or step % CANDIDATE_REFRESH == 0
             q, v, acc, fn, V, tau, its, done = _advance(q, v, acc, fn, step, th_arr, th_off, w_arr, T_arr, dt,
-                                                        alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, piv)
+                                                        alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, piv,
+                                                        confirm, st.newton)
             st.counts[0] += its
             if not done:
                 status, last = 1, step - 1
