@@ -55,7 +55,7 @@ class RunState(NamedTuple):
                                #   whole mechanism periods removed from q (see the module doc)
     peak: np.ndarray           # (n_contacts,) largest contact force of the run so far [N]
     newton: np.ndarray         # (3,) the HHT Newton's last measured contraction (_hht_step), the
-                               #   closed-contact signature of the last step's first iterate, and
+                               #   closed-contact signature (closed_set_signature) of the last step's first iterate, and
                                #   1.0 where unconfirmed steps are allowed (0: every step confirmed)
 
 
@@ -251,6 +251,26 @@ def static_advance(Q, i0, nominal, shifts, th_in, torque, tol_N, m, w, scale, ma
     return npt
 
 
+_MIX1, _MIX2, _MIX3 = np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
+_MASK52 = np.uint64((1 << 52) - 1)
+
+
+@kernel(inline=True)
+def closed_set_signature(force):
+    """A signature of the set of closed contacts (force > 0): the XOR of each closed index's SplitMix64
+    hash, cut to 52 bits so that the float carrying it (RunState.newton[1]) holds it exactly. Any
+    change of the set changes it but with probability 2^-52; a sum of indices (the first version)
+    was blind to two swaps of equal index sums in one step."""
+    h = np.uint64(0)
+    for c in range(force.shape[0]):
+        if force[c] > 0.0:
+            z = np.uint64(c + 1) * _MIX1
+            z = (z ^ (z >> np.uint64(30))) * _MIX2
+            z = (z ^ (z >> np.uint64(27))) * _MIX3
+            h ^= (z ^ (z >> np.uint64(31))) & _MASK52
+    return float(h)
+
+
 @kernel(inline=True)
 def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter, tol_m, Mdiag, J, piv, loose,
               confirm, newton):
@@ -280,10 +300,7 @@ def _hht_step(q, v, acc, fn, th1, w1, T1, h, alpha, beta, m, w, scale, max_iter,
         if not ok:
             return q, v, acc, fn, it + 1, False, 0.0, 0.0
         if it == 0:                      # which contacts are closed at the predictor
-            sig = 0.0
-            for c in range(w.force.shape[0]):
-                if w.force[c] > 0.0:
-                    sig += c + 1.0
+            sig = closed_set_signature(w.force)
             if sig != newton[1]:
                 confirm = True           # a contact closed or opened since the last step
             newton[1] = sig

@@ -286,3 +286,25 @@ def test_unconfirmed_steps_give_the_confirmed_run_to_well_inside_its_time_step_e
     assert fast.meta["newton_per_step"] < 0.8 * ref.meta["newton_per_step"]
     e = fast.meta["energy_J"]
     assert np.abs(e - ref.meta["energy_J"]).max() < 1e-3 * np.abs(ref.meta["energy_J"]).max()
+
+
+def test_the_closed_contact_signature_tells_every_changed_set_from_the_last():
+    # an unconfirmed step rests on "the predictor closes the contacts the last step closed"
+    # (kernels._hht_step): the signature must change whenever the closed set does, including the
+    # changes a sum of indices (its first version) missed: two swaps of equal index sums in one step
+    from dynamics.kernels import closed_set_signature
+    rng = np.random.default_rng(3)
+    force = np.zeros(80)
+    force[[3, 7, 40, 44]] = 1.0
+    base = closed_set_signature(force)
+    swapped = force.copy()
+    swapped[[3, 44]], swapped[[4, 43]] = 0.0, 2.5        # 3 -> 4 and 44 -> 43: the index sum is kept
+    assert closed_set_signature(swapped) != base
+    assert closed_set_signature(force * rng.uniform(0.5, 2.0, 80)) == base   # the set, not the forces
+    assert closed_set_signature(np.zeros(80)) == 0.0 != -1.0   # the run's start value (-1) never matches
+    owner = {}                                             # random sets of a loaded zone: no two share one
+    for _ in range(2000):
+        f = np.where(rng.random(80) < 0.3, 1.0, 0.0)
+        s = closed_set_signature(f)
+        assert s == float(int(s)) and 0.0 <= s < 2.0 ** 52  # exact in the float that carries it
+        assert owner.setdefault(s, f.tobytes()) == f.tobytes()
