@@ -5,9 +5,11 @@ Not a scale of every stiffness (issue 13): the compliance budget of the model
 rated torque) names the component that carries most of the wind-up; that component, and it alone,
 gets its compliance multiplied by f = exp(u) (StiffnessModel.stiffened(component, 1 / f)). Why
 that one: a TE bench sees only the sum of the series compliances, so the records cannot locate a
-missing compliance among the components; the largest share is the one whose model is most likely
-to be off (for the RV-160N FE: the carrier, 35 %, a 3D FE body whose bolted and pinned pillar
-joints the FE models as bonded), and one factor on it is one bounded, physical parameter. A linear
+missing compliance among the components (nor from the bench's own chain between the reducer and its
+output encoder: a torque meter or coupling there adds its twist, which the evidence says); the
+largest share is the one whose model is most likely to be off (for the RV-160N FE: the carrier,
+35 %, a 3D FE body whose bolted and pinned pillar joints the FE models as bonded), and one factor
+on it is one bounded, physical parameter. A linear
 FE component (carrier, crank bending) adds wind-up proportional to torque; a Hertzian one would
 stiffen with load: the evidence quotes the records' gap increments so the reader can check which.
 Parameter u = ln f [1]: any u is a positive compliance (a linearisation step in u cannot cross
@@ -99,7 +101,10 @@ class TorsionalStiffness(Cause):
         return (f"{ev.prefix}a backward-minus-forward mean TE gap left by the model ({ev.pair_gaps_text()}"
                 f"{slope}): the reducer winds up more (or less) than the FE says. Located in {where}, the "
                 f"largest share of the compliance budget: a TE bench sees only the sum of the series "
-                f"compliances, so which component is off is the budget's reading, not the records'.")
+                f"compliances, so which component is off is the budget's reading, not the records'; the sum "
+                f"includes the bench's own chain where the output encoder reads beyond a torque meter or "
+                f"coupling (a 2-5 kN.m torque flange twists 0.03 deg at its rating: 980-2870 N.m/arcmin, "
+                f"HBM TB1A data sheet).")
 
     def draw(self, rng, case):
         f = rng.uniform(0.4, 0.7) if rng.random() < 0.5 else rng.uniform(1.5, 3.0)
