@@ -55,8 +55,9 @@ class RunState(NamedTuple):
                                #   whole mechanism periods removed from q (see the module doc)
     peak: np.ndarray           # (n_contacts,) largest contact force of the run so far [N]
     newton: np.ndarray         # (3,) the HHT Newton's last measured contraction (_hht_step), the
-                               #   closed-contact signature (closed_set_signature) of the last step's first iterate, and
-                               #   1.0 where unconfirmed steps are allowed (0: every step confirmed)
+                               #   closed-contact signature (closed_set_signature) of the last step's
+                               #   first iterate, and 1.0 where unconfirmed steps are allowed (0: every
+                               #   step confirmed)
 
 
 class Samples(NamedTuple):
