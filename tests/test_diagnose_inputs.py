@@ -52,6 +52,12 @@ def _reported_within_bounds(d, case):
         assert lo < p["pin_clearance_um"] < hi
     if "compliance_factor" in p:
         assert 0.1 <= p["compliance_factor"] <= 10.0 and p["compliance_factor_ci95"][0] > 0
+        # the same wind-up as one series spring: the difference of the rated tangent compliances, its
+        # sign that of the factor's log (more compliance where f > 1)
+        rig = p["rigidity_at_rated_Nm_per_arcmin"]
+        added = p["added_series_compliance_arcmin_per_kNm"]
+        assert added == pytest.approx(1e3 * (1 / rig["extended"] - 1 / rig["model"]), rel=1e-12)
+        assert (added > 0) == (p["compliance_factor"] > 1)
 
 
 # ------------------------------------------------------------------ bounded fits (real model)

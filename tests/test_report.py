@@ -62,10 +62,12 @@ def test_the_bench_rigidity_reference_comes_from_the_case_s_own_diagnosis(case_d
                        "gain": 0.87, "holdout_gain": 0.86,
                        "parameters": {"located_component": "carrier", "compliance_factor": 3.05,
                                       "compliance_factor_ci95": [2.70, 3.46],
-                                      "rigidity_at_rated_Nm_per_arcmin": {"model": 871.4, "extended": 514.1}}}}))
+                                      "rigidity_at_rated_Nm_per_arcmin": {"model": 871.4, "extended": 514.1},
+                                      # 1e3 (1 / 514.1 - 1 / 871.4): the same wind-up as one series spring
+                                      "added_series_compliance_arcmin_per_kNm": 0.79757}}}))
     page = build_report(case_dir, rated_torque_Nm=1568.0, ratio=81.0).read_text()
     assert ("real bench (this case&#x27;s records, diagnosis) ~514 N m/arcmin tangent at rated (model 871): "
-            "carrier compliance x 3.05 [2.70, 3.46]") in page
+            "carrier compliance x 3.05 [2.70, 3.46], i.e. a series spring of 1254 N m/arcmin wherever it sits") in page
     # the fitted records' RMS before (10.3 / (1 - 0.87) = 79.2), not the baseline over every record
     assert "residual RMS on the fitted records 79.2 -&gt; 10.3 arcsec, gain 0.870, held-out gain 0.860" in page
     assert "baseline RMS over every record 80.7 arcsec" in page

@@ -16,7 +16,8 @@ Parameter u = ln f [1]: any u is a positive compliance (a linearisation step in 
 zero). Bounds f in [0.1, 10] (ASSUMED: an FE component off by more than 10 x is a wrong model,
 not a tolerance). Signature: a mean lag growing with torque, opposite in the two directions (a
 backward-minus-forward gap growing with torque). Reported: the component, its share, f with its
-95 % interval and the model's tangent rigidity at rated torque before and after.
+95 % interval, the model's tangent rigidity at rated torque before and after, and the difference of
+their compliances (the same wind-up as one series spring, arcmin per kN m; negative: stiffer).
 Unit size u = 0.1. Virtual bench: f in [0.4, 0.7] or [1.5, 3.0].
 """
 from __future__ import annotations
@@ -88,7 +89,10 @@ class TorsionalStiffness(Cause):
         return {"located_component": comp, "located_component_share": share,
                 "compliance_factor": math.exp(u),
                 "compliance_factor_ci95": [math.exp(max(u - tq * su, lo)), math.exp(min(u + tq * su, hi))],
-                "rigidity_at_rated_Nm_per_arcmin": {"model": before, "extended": after}}
+                "rigidity_at_rated_Nm_per_arcmin": {"model": before, "extended": after},
+                # the same wind-up as one series spring, wherever it sits (the located component or the
+                # bench's chain): what to set beside a torque flange's or coupling's data sheet
+                "added_series_compliance_arcmin_per_kNm": 1e3 * (1.0 / after - 1.0 / before)}
 
     def evidence(self, ev: Evidence) -> str:
         comp, share = located_component(ev.case, ev.stiffness)
