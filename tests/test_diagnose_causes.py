@@ -182,3 +182,38 @@ def test_the_housing_seat_pattern_is_its_seats_as_housing_modes_and_grows_with_t
         assert np.abs(cond - dof).max() < 1e-3
         lines.append(spectrum_of(ang / CASE.ratio, cond - base).at(2 * zc))
     assert lines[0] < 1e-3 and lines[2] > 3.0 * lines[1] > 0.0
+
+
+def test_the_single_journal_is_read_off_the_crank_causes_line_not_their_radial_split():
+    # a linear stand-in of the zp x line (complex per-crank coefficients c_j per um of radial error, d per
+    # um of the tangential pattern's components, 90 deg apart: the RV-40E model's shape, 0.85 and ~1.1
+    # arcsec/um): a fit that splits one journal's line between radial and tangential parameters
+    # still reads as that journal; the radial reading alone would not. A model without the line
+    # reads no journal (no division by its zero line).
+    from pipeline.diagnosis.causes.crank_eccentricity_error import ARCMIN_PER_RAD
+    cause = causes.get("crank_eccentricity_error")
+    n, zp = CASE.carrier.crank_count, CASE.cycloid.zp
+    c = 0.85 * np.exp(2j * np.pi * np.arange(n) / n)
+    d = 1.1j * np.array([1.0, 1j])
+    to_um = CASE.cycloid.eccentricity_mm * 1e3 / ARCMIN_PER_RAD
+
+    def line_model(case, stiffness, ang, torque, direction, *rest):
+        e = np.asarray(case.errors.eccentric_error_um, float) * np.ones(n)
+        tang = np.asarray(case.errors.eccentric_phase_arcmin, float) * np.ones(n) * to_um
+        x = 2 * np.pi * np.arange(n) / n            # the pattern's (cos, sin) from its per-crank values
+        pattern = 2.0 / n * np.array([tang @ np.cos(x), tang @ np.sin(x)])
+        z = c @ e + d @ pattern
+        theta = np.radians(np.asarray(ang, float)) / case.ratio
+        return np.real(z * np.exp(1j * zp * theta))
+
+    target = -6.0 * c[0]                             # journal 1 alone, -6 um
+    tang = np.array([0.8, -0.5])
+    rest = target - d @ tang                         # radial part of the split: the least-norm solution
+    A = np.vstack([c.real, c.imag])
+    radial = np.linalg.lstsq(A, np.array([rest.real, rest.imag]), rcond=None)[0]
+    fit = Fitted(np.concatenate([radial, tang]), np.eye(n + 2), 2.0, CASE, STIFF, line_model)
+    j, e = cause.single_journal(fit)
+    assert (j, e) == (0, pytest.approx(-6.0, rel=1e-9))
+    assert abs(cause.report(fit)["crank_eccentricity_error_amplitude_um"] * n / 2 - 6.0) > 0.5   # the radial reading misses
+    flat = Fitted(fit.p, fit.cov, 2.0, CASE, STIFF, lambda case, s, ang, *a: np.zeros(len(ang)))
+    assert cause.single_journal(flat) == (0, 0.0)

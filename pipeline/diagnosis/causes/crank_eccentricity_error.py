@@ -152,11 +152,13 @@ class CrankEccentricityError(Cause):
             unit = np.zeros(len(fit.p))
             unit[j] = UNIT_UM
             per = _zp_line(fit.te_model, *self.apply(fit.case, fit.stiffness, unit), base) / UNIT_UM
+            if per == 0.0:                         # a stand-in model without this journal's line
+                continue
             e = (line / per).real                  # the size along this journal's own line
             miss = abs(line - e * per)             # what it leaves of the fitted line
             if best is None or miss < best[2]:
                 best = (j, float(e), miss)
-        return best[0], best[1]
+        return (best[0], best[1]) if best else (0, 0.0)
 
     def evidence(self, ev: Evidence) -> str:
         zp = self.orders(ev.case)[0]
