@@ -189,3 +189,27 @@ def gap_lines(speed_rpm, torque_Nm, measured_arcsec, predicted_arcsec) -> dict:
             "gap_rms_error_on_lines_arcsec": rms(p[on] - m[on]),
             "gap_rms_error_with_bench_slopes_arcsec": rms(p_slope[on] - m[on]),
             "gap_rms_error_with_bench_zero_load_gaps_arcsec": rms(p_icpt[on] - m[on])}
+
+
+# What-ifs of the bench's own chain (not the prediction: the dataset does not say where its output encoder
+# sits): where the output encoder reads beyond the torque meter, the meter's twist adds to every gap. Torque
+# flanges of the bench's class, HBM TB1A data sheet (B0161), torsion angle at the nominal torque:
+TORQUE_FLANGES = (("HBM TB1A 2 kN m", 2000.0, 0.034), ("HBM TB1A 5 kN m", 5000.0, 0.029))
+
+
+def chain_whatifs(torque_Nm, measured_arcsec, predicted_arcsec) -> list[dict]:
+    """Per flange of TORQUE_FLANGES: its torsional stiffness k and the gap RMS error with its twist added to
+    the predicted gap (a series spring adds exactly -2 T / k to forward minus backward, the bench's
+    convention; couplings not counted)."""
+    import numpy as np
+
+    from dynamics.results import ARCSEC_PER_ARCMIN, ARCSEC_PER_RAD
+    T, m, p = (np.asarray(x, float) for x in (torque_Nm, measured_arcsec, predicted_arcsec))
+    out = []
+    for name, nominal_Nm, angle_deg in TORQUE_FLANGES:
+        k = nominal_Nm / math.radians(angle_deg)
+        with_chain = p - 2.0 * T / k * ARCSEC_PER_RAD
+        out.append({"flange": name, "source": "HBM TB1A data sheet B0161: torsion angle at nominal torque",
+                    "stiffness_Nm_per_rad": k, "rigidity_Nm_per_arcmin": k * ARCSEC_PER_ARCMIN / ARCSEC_PER_RAD,
+                    "gap_rms_error_arcsec": float(np.sqrt(np.mean((with_chain - m) ** 2)))})
+    return out

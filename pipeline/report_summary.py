@@ -260,4 +260,12 @@ def operating_rows(case_dir: Path) -> list[Row]:
                             f"(as predicted {gl['gap_rms_error_on_lines_arcsec']:.1f})",
                             "what-ifs on the bench's own lines, the model unchanged", "conditions/conditions.json",
                             f"rigidity the gap lines imply, N m/arcmin{k}"))
+        ch = m.get("bench_chain_whatifs")
+        if ch:
+            rows.append(Row("what-if, not the prediction: a torque flange between the reducer and the output encoder",
+                            " / ".join(f"{w['gap_rms_error_arcsec']:.1f}" for w in ch) + " arcsec gap RMS",
+                            "; ".join(f"{w['flange']}: {w['rigidity_Nm_per_arcmin']:.0f} N m/arcmin" for w in ch),
+                            "conditions/conditions.json",
+                            "the bench's layout, which its dataset does not state: the unknown that moves this "
+                            "figure most (its twist adds -2 T / k to every gap)"))
     return rows

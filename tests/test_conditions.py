@@ -144,3 +144,24 @@ def test_gap_lines_split_the_error_into_the_wind_up_and_the_zero_load_gap():
     assert r["gap_rms_error_on_lines_arcsec"] == pytest.approx(20.0)
     assert r["gap_rms_error_with_bench_zero_load_gaps_arcsec"] == pytest.approx(0.0, abs=1e-9)
     assert r["gap_rms_error_with_bench_slopes_arcsec"] == pytest.approx(20.0)
+
+
+def test_a_torque_flange_in_the_bench_chain_adds_its_twist_to_every_gap():
+    # the what-if of the bench's layout: a series spring k adds -2 T / k to forward minus backward; a model
+    # whose gap misses exactly one data-sheet flange's twist is put right by that flange and by no other.
+    # TB1A 2 kN m: 2000 N m at 0.034 deg -> 3.37e6 N m/rad, 980 N m/arcmin (data sheet B0161)
+    import math
+
+    from dynamics.conditions import TORQUE_FLANGES, chain_whatifs
+    from dynamics.results import ARCSEC_PER_RAD
+    T = [0.0, 300.0, 900.0, 1800.0]
+    name, nominal, angle = TORQUE_FLANGES[0]
+    k = nominal / math.radians(angle)
+    bench = [-30.0 - 0.24 * t for t in T]
+    model = [b + 2.0 * t / k * ARCSEC_PER_RAD for b, t in zip(bench, T)]
+    out = chain_whatifs(T, bench, model)
+    assert [w["flange"] for w in out] == [f[0] for f in TORQUE_FLANGES]
+    assert out[0]["stiffness_Nm_per_rad"] == pytest.approx(3.370e6, rel=1e-3)
+    assert out[0]["rigidity_Nm_per_arcmin"] == pytest.approx(980.4, rel=1e-3)
+    assert out[0]["gap_rms_error_arcsec"] == pytest.approx(0.0, abs=1e-9)
+    assert all(w["gap_rms_error_arcsec"] > 10.0 for w in out[1:])
