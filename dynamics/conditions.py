@@ -197,6 +197,22 @@ def gap_lines(speed_rpm, torque_Nm, measured_arcsec, predicted_arcsec) -> dict:
 TORQUE_FLANGES = (("HBM TB1A 2 kN m", 2000.0, 0.034), ("HBM TB1A 5 kN m", 5000.0, 0.029))
 
 
+def torque_flange_rigidities() -> list[tuple[str, float, float]]:
+    """(name, nominal torque [N m], torsional stiffness [N m/rad]) of each of TORQUE_FLANGES."""
+    return [(name, nominal, nominal / math.radians(angle)) for name, nominal, angle in TORQUE_FLANGES]
+
+
+def torque_flange_range_text() -> str:
+    """The TORQUE_FLANGES' span in words, for the evidence and report lines that set a fitted compliance
+    beside a bench's torque meter: 'a 2-5 kN m torque flange is 980-2874 N m/arcmin (HBM TB1A data sheet)'."""
+    from dynamics.results import ARCSEC_PER_ARCMIN, ARCSEC_PER_RAD
+    f = torque_flange_rigidities()
+    kn = [n / 1e3 for _, n, _ in f]
+    r = [k * ARCSEC_PER_ARCMIN / ARCSEC_PER_RAD for _, _, k in f]
+    return (f"a {min(kn):g}-{max(kn):g} kN m torque flange is {min(r):.0f}-{max(r):.0f} N m/arcmin "
+            f"(HBM TB1A data sheet)")
+
+
 def chain_whatifs(torque_Nm, measured_arcsec, predicted_arcsec) -> list[dict]:
     """Per flange of TORQUE_FLANGES: its torsional stiffness k and the gap RMS error with its twist added to
     the predicted gap (a series spring adds exactly -2 T / k to forward minus backward, the bench's
@@ -206,8 +222,7 @@ def chain_whatifs(torque_Nm, measured_arcsec, predicted_arcsec) -> list[dict]:
     from dynamics.results import ARCSEC_PER_ARCMIN, ARCSEC_PER_RAD
     T, m, p = (np.asarray(x, float) for x in (torque_Nm, measured_arcsec, predicted_arcsec))
     out = []
-    for name, nominal_Nm, angle_deg in TORQUE_FLANGES:
-        k = nominal_Nm / math.radians(angle_deg)
+    for name, _, k in torque_flange_rigidities():
         with_chain = p - 2.0 * T / k * ARCSEC_PER_RAD
         out.append({"flange": name, "source": "HBM TB1A data sheet B0161: torsion angle at nominal torque",
                     "stiffness_Nm_per_rad": k, "rigidity_Nm_per_arcmin": k * ARCSEC_PER_ARCMIN / ARCSEC_PER_RAD,

@@ -13,6 +13,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from dynamics.conditions import torque_flange_range_text
 from dynamics.loads import FORMS
 from dynamics.matrix import paper001_sigma_arcsec
 
@@ -74,8 +75,8 @@ def _bench_rigidity(diag: dict | None, rigidity: float | None) -> str | None:
     band = f" [{ci[0]:.2f}, {ci[1]:.2f}]" if isinstance(ci, list) and len(ci) == 2 else ""
     fx = f"{f:.2f}{band}" if isinstance(f, (int, float)) else "?"
     added = _get(ext, "parameters", "added_series_compliance_arcmin_per_kNm")
-    spring = (f", i.e. a series spring of {1e3 / added:.0f} N m/arcmin wherever it sits (in the bench's chain too: a "
-              f"2-5 kN m torque flange is 980-2870, HBM TB1A)") if isinstance(added, (int, float)) and added > 0 else ""
+    spring = (f", i.e. a series spring of {1e3 / added:.0f} N m/arcmin wherever it sits (in the bench's chain too: "
+              f"{torque_flange_range_text()})") if isinstance(added, (int, float)) and added > 0 else ""
     return (f"real bench (this case's records, diagnosis) ~{rig['extended']:.0f} N m/arcmin tangent at "
             f"rated (model {rig.get('model', float('nan')):.0f}): {where} compliance x {fx}{spring}")
 

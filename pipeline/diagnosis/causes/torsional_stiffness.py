@@ -25,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+from dynamics.conditions import torque_flange_range_text
 from pipeline.diagnosis.causes.base import Cause, Evidence, Fitted, Param
 
 FACTOR_RANGE = (0.1, 10.0)
@@ -107,8 +108,7 @@ class TorsionalStiffness(Cause):
                 f"largest share of the compliance budget: a TE bench sees only the sum of the series "
                 f"compliances, so which component is off is the budget's reading, not the records'; the sum "
                 f"includes the bench's own chain where the output encoder reads beyond a torque meter or "
-                f"coupling (a 2-5 kN.m torque flange twists 0.03 deg at its rating: 980-2870 N.m/arcmin, "
-                f"HBM TB1A data sheet).")
+                f"coupling ({torque_flange_range_text()}).")
 
     def draw(self, rng, case):
         f = rng.uniform(0.4, 0.7) if rng.random() < 0.5 else rng.uniform(1.5, 3.0)
