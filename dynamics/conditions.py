@@ -204,13 +204,13 @@ def torque_flange_rigidities() -> list[tuple[str, float, float]]:
 
 def torque_flange_range_text() -> str:
     """The TORQUE_FLANGES' span in words, for the evidence and report lines that set a fitted compliance
-    beside a bench's torque meter: 'a 2-5 kN m torque flange is 980-2874 N m/arcmin (HBM TB1A data sheet)'."""
+    beside a bench's torque meter: 'a 2-5 kN m torque flange is 980-2874 N m/arcmin, HBM TB1A data sheet'."""
     from dynamics.results import ARCSEC_PER_ARCMIN, ARCSEC_PER_RAD
     f = torque_flange_rigidities()
     kn = [n / 1e3 for _, n, _ in f]
     r = [k * ARCSEC_PER_ARCMIN / ARCSEC_PER_RAD for _, _, k in f]
-    return (f"a {min(kn):g}-{max(kn):g} kN m torque flange is {min(r):.0f}-{max(r):.0f} N m/arcmin "
-            f"(HBM TB1A data sheet)")
+    return (f"a {min(kn):g}-{max(kn):g} kN m torque flange is {min(r):.0f}-{max(r):.0f} N m/arcmin, "
+            f"HBM TB1A data sheet")
 
 
 def chain_whatifs(torque_Nm, measured_arcsec, predicted_arcsec) -> list[dict]:
