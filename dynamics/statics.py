@@ -46,6 +46,20 @@ def nominal_q(model: ReducerModel, input_rad: float, lag_rad: float = 0.0) -> np
     return q
 
 
+def nominal_qdd(model: ReducerModel, input_rad: float) -> np.ndarray:
+    """d2 nominal_q / d input^2: the discs' orbit, -(d phi / d th)^2 E (cos, sin)(phi + pi d); every
+    other coordinate of the rigid kinematics is linear in the input (zero)."""
+    s1, lay = model.case.stage1, model.layout
+    dphi = 1.0 / model.ratio - s1.z1 / s1.z2 * (1.0 - 1.0 / model.ratio)
+    qdd = np.zeros(model.n_dof)
+    q = nominal_q(model, input_rad)
+    disc = lay["disc"]
+    for d in range(model.n_disc):
+        i = disc.index(d)
+        qdd[i:i + 2] = -dphi ** 2 * q[i:i + 2]
+    return qdd
+
+
 def turn_shift(model: ReducerModel) -> np.ndarray:
     """Exact change of q when the input turns one period 2 pi i (the carrier one revolution):
     carrier and discs +2 pi, eccentrics 2 pi (1 - zp), mesh deflection and translations unchanged.

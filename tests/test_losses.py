@@ -11,9 +11,9 @@ import pytest
 from dynamics.losses import Lubricant, bearings as brg, operating_point
 from dynamics.losses import lubricant as lb
 from dynamics.losses.contacts import contact_friction, rates
-from dynamics.losses.operating import friction_loop, starting_torque_Nm
+from dynamics.losses.operating import friction_loop, inertia_load, starting_torque_Nm
 from dynamics.catalog import hysteresis
-from dynamics.statics import solve_static
+from dynamics.statics import nominal_q, nominal_qdd, solve_static
 from geometry.lubrication import Lubrication
 from tests.support import model_for_tests
 
@@ -132,6 +132,32 @@ def test_with_every_loss_constant_zero_the_operating_point_is_the_frictionless_m
     assert np.allclose(op.forward.te_arcsec, te, atol=1e-3)
     assert op.forward.efficiency == pytest.approx(1.0, abs=1e-12)
     assert op.input_torque_Nm == pytest.approx(200.0 / model.ratio, rel=1e-6)
+
+
+def test_the_running_inertia_is_each_disc_s_orbit_and_barely_moves_the_gap(model):
+    """d'Alembert load of the running mechanism: m E omega_e^2 outward on each disc (omega_e the
+    eccentrics' absolute speed), nothing on any other coordinate; the second derivative of the
+    rigid kinematics; even in the sense of motion, so the gap moves by a rounding-size amount."""
+    th, om = 0.7, 1800 * math.pi / 30
+    s1 = model.case.stage1
+    om_e = abs(1 / model.ratio - s1.z1 / s1.z2 * (1 - 1 / model.ratio)) * om
+    f = inertia_load(model, th, om)
+    q, h = nominal_q(model, th), 1e-2
+    fd = (nominal_q(model, th + h) - 2 * q + nominal_q(model, th - h)) / h ** 2
+    assert np.allclose(nominal_qdd(model, th), fd, rtol=0, atol=1e-8)
+    discs = [model.disc_index(d) for d in range(model.n_disc)]
+    E = model.case.si.eccentricity_m
+    for i in discs:
+        assert np.linalg.norm(f[i:i + 2]) == pytest.approx(model.mass[i] * E * om_e ** 2, rel=1e-12)
+        assert f[i:i + 2] @ q[i:i + 2] == pytest.approx(np.linalg.norm(f[i:i + 2]) * E, rel=1e-12)   # outward
+    rest = np.ones(model.n_dof, bool)
+    for i in discs:
+        rest[i:i + 2] = False
+    assert not np.any(f[rest])
+    lub = frictionless(Lubrication())
+    op = operating_point(model, lub, 1800.0, 200.0, 25.0, points_per_rev=5)
+    assert op.gap_arcsec != op.gap_frictionless_arcsec       # the load is applied
+    assert op.gap_arcsec == pytest.approx(op.gap_frictionless_arcsec, abs=0.05)
 
 
 def test_the_friction_forces_do_exactly_the_negative_work_of_the_power_they_dissipate(model):

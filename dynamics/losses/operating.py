@@ -10,7 +10,12 @@ revolution:
   2. the friction forces and moments of every contact (dynamics.losses.contacts: directions from the
      running kinematics, magnitudes from the contact loads and the mixed-friction coefficient) added
      as loads, and the statics re-solved by Newton on the model's tangent with the contact normal
-     forces (hence the friction) recomputed at each iterate, to FRICTION_TOL;
+     forces (hence the friction) recomputed at each iterate, to FRICTION_TOL. With the friction, the
+     steady inertia of the running mechanism (d'Alembert): -M d2q/dt2 of the rigid
+     kinematics at constant input speed, i.e. each disc's orbit, m E omega_e^2 outward along its
+     eccentric (omega_e = the eccentrics' absolute speed, 39/81 of the input on the RV-160N: 61 N per
+     disc at 1800 rpm); every other body turns at constant speed. Even in the sense of motion, it
+     moves the gap by <= 0.012 arcsec at 1800 rpm (RV-160N, 0 to 1000 N m): not the bench's speed trend;
   3. TE = the output encoder's reading - input / i (bench convention), its mean and peak-to-peak per
      direction; efficiency = P_out / (P_out + P_loss) and input torque = (P_out + P_loss) / omega_in,
      forward, averaged over the revolution (power-weighted).
@@ -29,7 +34,7 @@ from dynamics.losses.contacts import RPM_PER_RAD_S, contact_friction, rates
 from dynamics.losses.lubricant import Lubricant
 from dynamics.reducer import DynamicsError, ReducerModel, evaluate
 from dynamics.results import ARCSEC_PER_RAD
-from dynamics.statics import nominal_q, solve_static
+from dynamics.statics import nominal_q, nominal_qdd, solve_static
 
 FRICTION_TOL_RAD = 2.5e-8      # Newton on the friction loads: output-angle step below 0.005 arcsec
 FRICTION_MAX_ITER = 8
@@ -105,18 +110,26 @@ def _output_angle_rad(model: ReducerModel, q: np.ndarray) -> float:
     return float(model.measured_output_rad(q[model.i_out]))
 
 
+def inertia_load(model: ReducerModel, input_rad: float, input_speed_rad_s: float) -> np.ndarray:
+    """(n,) d'Alembert load of the rigid mechanism running at a constant input speed: -M qdd."""
+    return -model.mass * nominal_qdd(model, input_rad) * input_speed_rad_s ** 2
+
+
 def friction_equilibrium(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_rad: float, torque: float,
                          qdot: np.ndarray, oil_temperature_C: float, input_speed_rad_s: float,
-                         shape: np.ndarray | None = None, viscous: bool = True):
-    """Static equilibrium under `torque` at the output (record convention, applied) plus the contact
-    friction of a motion qdot: Newton on the tangent from the frictionless state q, the friction
-    recomputed from the normal forces at every iterate. Returns (q, friction of the last iterate, its)."""
+                         shape: np.ndarray | None = None, viscous: bool = True, load: np.ndarray | None = None):
+    """Static equilibrium under `torque` at the output (record convention, applied), the optional
+    `load` (n,) and the contact friction of a motion qdot: Newton on the tangent from the frictionless
+    state q, the friction recomputed from the normal forces at every iterate. Returns (q, friction of
+    the last iterate, its)."""
     io = model.i_out
     fr = None
     for it in range(1, FRICTION_MAX_ITER + 1):
         fr = contact_friction(model, lub, q, input_rad, qdot, oil_temperature_C, input_speed_rad_s, shape, viscous)
         w, _ = evaluate(model, q, input_rad, want_k=True)
         res = w.f + fr.force
+        if load is not None:
+            res += load
         res[io] -= torque
         try:
             dq = np.linalg.solve(0.5 * (w.K + w.K.T), res)
@@ -153,7 +166,8 @@ def run_direction(model: ReducerModel, lub: Lubricant, input_speed_rpm: float, t
         q = st.q
         te0.append(st.te_arcsec)
         if friction:
-            qf, fr, it = friction_equilibrium(model, lub, q, th, T, qdot, oil_temperature_C, om_in)
+            qf, fr, it = friction_equilibrium(model, lub, q, th, T, qdot, oil_temperature_C, om_in,
+                                              load=inertia_load(model, th, om_in))
             iters += it
             for k, v in fr.power_W.items():
                 losses.setdefault(k, []).append(v)
