@@ -228,3 +228,41 @@ def chain_whatifs(torque_Nm, measured_arcsec, predicted_arcsec) -> list[dict]:
                     "stiffness_Nm_per_rad": k, "rigidity_Nm_per_arcmin": k * ARCSEC_PER_ARCMIN / ARCSEC_PER_RAD,
                     "gap_rms_error_arcsec": float(np.sqrt(np.mean((with_chain - m) ** 2)))})
     return out
+
+
+# What-if of the parts' temperatures (not the prediction: dynamics.thermal): both discs this much warmer
+# than every other part, at the table's fastest speed
+DISC_WARMER_K = (2.0, 4.0)
+
+
+def thermal_whatif(torque_Nm, gap_by_dT: dict, lines: dict, speed_rpm: float) -> dict | None:
+    """What discs dT warmer than the ring do to the gap line at one speed, beside the bench's change of
+    its line from its slowest to its fastest speed. gap_by_dT: {dT [K]: predicted gaps at torque_Nm}
+    (0 K the prediction); lines: gap_lines(...)["by_speed_rpm"] of the measured table. Per dT the line
+    gap = a + b T; the change per K of a [arcsec] and of b [% of b at 0 K] (least squares through the
+    dTs); the bench's change a_fast - a_slow and (b_fast - b_slow) / b_slow; and the kelvin that
+    would give each (None where the model's change per K has the other sign or is nil)."""
+    import numpy as np
+    T = np.asarray(torque_Nm, float)
+    if len(set(T.tolist())) < 2 or 0.0 not in gap_by_dT:
+        return None
+    dTs = sorted(gap_by_dT)
+    fits = {dT: np.polyfit(T, np.asarray(gap_by_dT[dT], float), 1) for dT in dTs}
+    a = np.array([fits[dT][1] for dT in dTs])
+    b = np.array([fits[dT][0] for dT in dTs])
+    da = float(np.polyfit(dTs, a, 1)[0])
+    db_pct = float(np.polyfit(dTs, b, 1)[0] / b[0] * 100.0)
+    out = {"speed_rpm": float(speed_rpm), "rows": int(len(T)), "disc_warmer_K": [float(d) for d in dTs],
+           "zero_load_gap_arcsec": a.tolist(), "arcsec_per_Nm": b.tolist(),
+           "zero_load_gap_change_arcsec_per_K": da, "wind_up_change_pct_per_K": db_pct}
+    speeds = sorted(lines, key=float)
+    if len(speeds) >= 2:
+        slow, fast = lines[speeds[0]], lines[speeds[-1]]
+        d_a = fast["measured_zero_load_gap_arcsec"] - slow["measured_zero_load_gap_arcsec"]
+        d_b = (fast["measured_arcsec_per_Nm"] - slow["measured_arcsec_per_Nm"]) / slow["measured_arcsec_per_Nm"] * 100.0
+        kelvin = lambda need, per_K: need / per_K if per_K and need / per_K > 0 else None  # noqa: E731
+        out.update({"bench_speeds_rpm": [float(speeds[0]), float(speeds[-1])],
+                    "bench_zero_load_gap_change_arcsec": float(d_a), "bench_wind_up_change_pct": float(d_b),
+                    "kelvin_for_bench_zero_load_gap_change": kelvin(d_a, da),
+                    "kelvin_for_bench_wind_up_change": kelvin(d_b, db_pct)})
+    return out

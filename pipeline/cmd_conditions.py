@@ -55,7 +55,8 @@ def register(sub) -> None:
 
 def _task(kind, *args):
     """Pure task of the pool: one of the row chunks, no-load points, chart temperatures, case figures."""
-    return {"rows": _rows_task, "noload": _no_load_task, "chart": _efficiency_task, "case": _case_task}[kind](*args)
+    return {"rows": _rows_task, "noload": _no_load_task, "chart": _efficiency_task, "case": _case_task,
+            "thermal": _thermal_task}[kind](*args)
 
 
 def _case_task(case, stiffness):
@@ -74,6 +75,11 @@ def _rows_task(case, stiffness, rows, points_per_rev):
         op = operating_point(model, lub, speed, torque, temp, points_per_rev=points_per_rev)
         out.append(op.summary())
     return out
+
+
+def _thermal_task(case, stiffness, rows, points_per_rev, dT):
+    """Pure task: the rows' operating points on a case whose discs are dT warmer (dT: the result's key)."""
+    return _rows_task(case, stiffness, rows, points_per_rev)
 
 
 def _no_load_task(case, stiffness, speed, temp, points_per_rev):
@@ -97,16 +103,36 @@ def _efficiency_task(case, stiffness, temp):
              for n in CHART_OUTPUT_RPM] for q in CHART_TORQUE_PCT]
 
 
-def _measured_comparison(table, results) -> dict | None:
-    """Gap error RMS (with and without friction) and gap per N m per speed, where the table has gaps."""
-    from dynamics.conditions import chain_whatifs, gap_lines
+def _measured_gaps(table) -> np.ndarray | None:
+    """The table's measured gaps, where it has a numeric gap column."""
     col = "gap_fw_minus_bw_arcsec"
     if col not in table.header:
         return None
     i = table.header.index(col)
     try:
-        meas = np.array([float(r.fields[i]) for r in table.rows])
+        return np.array([float(r.fields[i]) for r in table.rows])
     except ValueError:
+        return None
+
+
+def _thermal_rows(table) -> tuple[float, list[int]] | None:
+    """(speed, row indices) of the thermal what-if: the fastest speed with two torques or more, where
+    the table has measured gaps (the what-if sets the model's change beside the bench's)."""
+    if _measured_gaps(table) is None:
+        return None
+    for s in sorted({r.input_speed_rpm for r in table.rows}, reverse=True):
+        idx = [i for i, r in enumerate(table.rows) if r.input_speed_rpm == s]
+        if len({table.rows[i].torque_Nm for i in idx}) >= 2:
+            return s, idx
+    return None
+
+
+def _measured_comparison(table, results, thermal_gaps: dict | None = None) -> dict | None:
+    """Gap error RMS (with and without friction) and gap per N m per speed, where the table has gaps;
+    thermal_gaps {dT: gaps at the _thermal_rows} adds the thermal what-if."""
+    from dynamics.conditions import chain_whatifs, gap_lines, thermal_whatif
+    meas = _measured_gaps(table)
+    if meas is None:
         return None
     pred = np.array([r["gap_fw_minus_bw_arcsec"] for r in results])
     pred0 = np.array([r["gap_frictionless_arcsec"] for r in results])
@@ -117,15 +143,23 @@ def _measured_comparison(table, results) -> dict | None:
     slopes = {k: {"measured_arcsec_per_Nm": v["measured_arcsec_per_Nm"], "predicted_arcsec_per_Nm": v["predicted_arcsec_per_Nm"],
                   "frictionless_arcsec_per_Nm": friction_free[k]["predicted_arcsec_per_Nm"], "rows": v["rows"]}
               for k, v in lines["by_speed_rpm"].items()}
+    thermal = None
+    if thermal_gaps:
+        s, idx = _thermal_rows(table)
+        thermal = thermal_whatif(torque[idx], {0.0: pred[idx], **thermal_gaps}, lines["by_speed_rpm"], s)
     return {"rows": len(meas), "gap_rms_error_arcsec": float(np.sqrt(np.mean((pred - meas) ** 2))),
             "gap_rms_error_frictionless_arcsec": float(np.sqrt(np.mean((pred0 - meas) ** 2))),
             "gap_mean_error_arcsec": float(np.mean(pred - meas)), "gap_slope_by_speed_rpm": slopes,
             "gap_lines": lines, "bench_chain_whatifs": chain_whatifs(torque, meas, pred),
+            "thermal_whatif": thermal,
             "note": "gap = mean TE forward - backward (bench convention, negative under load); gap_lines: "
                     "per speed gap = a + b T (a zero-load gap, b wind-up, rigidity 120 / |b| N m/arcmin) and the "
                     "RMS error with the bench's slopes or zero-load gaps put in (what-ifs, the model unchanged); "
                     "bench_chain_whatifs: the gap RMS error were the output encoder to read beyond a torque flange "
-                    "(a what-if of the bench's layout, which the dataset does not state; not the prediction)"}
+                    "(a what-if of the bench's layout, which the dataset does not state; not the prediction); "
+                    "thermal_whatif: the gap line at the fastest speed were both discs dT warmer than every other "
+                    "part (dynamics.thermal; a what-if of the parts' temperatures, which the bench does not give; "
+                    "not the prediction), its change per K beside the bench's from its slowest to its fastest speed"}
 
 
 def run(args) -> int:
@@ -165,8 +199,19 @@ def run(args) -> int:
     tasks = [("case", case, stiffness)] + [("chart", case, stiffness, t) for t in temps] \
         + [("rows", case, stiffness, rows[i:i + ROWS_PER_TASK], ppr) for i in range(0, len(rows), ROWS_PER_TASK)] \
         + [("noload", case, stiffness, s, t, ppr) for s, t in pairs]
+    hot = _thermal_rows(table)
+    if hot is not None:
+        from dynamics.conditions import DISC_WARMER_K
+        from dynamics.thermal import warmer_discs
+        hot_rows = [rows[i] for i in hot[1]]
+        tasks += [("thermal", warmer_discs(case, dT), stiffness, hot_rows[i:i + ROWS_PER_TASK], ppr, dT)
+                  for dT in DISC_WARMER_K for i in range(0, len(hot_rows), ROWS_PER_TASK)]
     done = run_tasks(_task, tasks, workers=args.workers, scheduler=args.scheduler)
     kinds = [t[0] for t in tasks]
+    thermal_gaps: dict = {}
+    for t, d in zip(tasks, done):
+        if t[0] == "thermal":
+            thermal_gaps.setdefault(t[-1], []).extend(r["gap_fw_minus_bw_arcsec"] for r in d)
     summary = done[0]
     chart = [d for k, d in zip(kinds, done) if k == "chart"]
     results = [r for k, d in zip(kinds, done) if k == "rows" for r in d]
@@ -175,7 +220,7 @@ def run(args) -> int:
                                    "temperature_C": temps, "efficiency": chart}
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    _write(out, args, base_case, base_stiffness, lub, table, results, no_load, summary, causes, ppr)
+    _write(out, args, base_case, base_stiffness, lub, table, results, no_load, summary, causes, ppr, thermal_gaps)
     if not args.quiet:
         cmp = _measured_comparison(table, results)
         tail = "" if cmp is None else (f"; gap RMS error {cmp['gap_rms_error_arcsec']:.1f} arcsec "
@@ -220,7 +265,7 @@ def _jsonable(x):
     return x
 
 
-def _write(out, args, case, stiffness, lub, table, results, no_load, summary, causes, ppr) -> None:
+def _write(out, args, case, stiffness, lub, table, results, no_load, summary, causes, ppr, thermal_gaps) -> None:
     import dataclasses
 
     from dynamics.conditions import measured_name, table_text
@@ -236,7 +281,7 @@ def _write(out, args, case, stiffness, lub, table, results, no_load, summary, ca
     if args.diagnosis:
         inputs["diagnosis"] = file_fingerprint(args.diagnosis)
     doc = {"case": case.name, "rows": rows, "points_per_rev": ppr, "diagnosis_causes": causes,
-           "against_measured": _measured_comparison(table, results),
+           "against_measured": _measured_comparison(table, results, thermal_gaps),
            "lubrication": dataclasses.asdict(case.lubrication),
            "viscosity_cSt_at": {f"{t:g}": float(lub.kinematic_cSt(t)) for t in (25.0, 40.0, 100.0)},
            **summary,

@@ -269,4 +269,18 @@ def operating_rows(case_dir: Path) -> list[Row]:
                             "conditions/conditions.json",
                             "the bench's layout, which its dataset does not state: the unknown that moves this "
                             "figure most (its twist adds -2 T / k to every gap)"))
+        th = m.get("thermal_whatif")
+        if th and th.get("bench_speeds_rpm"):
+            need = lambda k: "no warming gives it" if k is None else f"{k:.3g} K"  # noqa: E731
+            rows.append(Row(f"what-if, not the prediction: discs warmer than the ring, {th['speed_rpm']:g} rpm",
+                            f"zero-load gap {th['zero_load_gap_change_arcsec_per_K']:+.2f} arcsec/K, "
+                            f"wind-up {th['wind_up_change_pct_per_K']:+.2f} %/K",
+                            f"bench {th['bench_speeds_rpm'][0]:g} -> {th['bench_speeds_rpm'][1]:g} rpm: "
+                            f"{th['bench_zero_load_gap_change_arcsec']:+.1f} arcsec "
+                            f"({need(th['kelvin_for_bench_zero_load_gap_change'])}), "
+                            f"wind-up {th['bench_wind_up_change_pct']:+.1f} % "
+                            f"({need(th['kelvin_for_bench_wind_up_change'])})",
+                            "conditions/conditions.json",
+                            "the parts' temperatures, which the bench does not give (dynamics.thermal); in brackets "
+                            "the warming that would make the bench's change between its slowest and fastest speed"))
     return rows

@@ -113,6 +113,25 @@ def test_comments_any_column_order_and_extra_columns_are_read_and_copied_through
     assert gap < float(rows[0]["gap_fw_minus_bw_arcsec"]) < 0        # the gap opens with torque
 
 
+def test_a_table_with_measured_gaps_gets_the_thermal_what_if_and_its_report_row(tmp_path, stiffness):
+    import json
+
+    from pipeline.report_summary import operating_rows
+    path = table(tmp_path, f"{HEAD},gap_fw_minus_bw_arcsec\n100,0,25,-20\n100,300,25,-100\n"
+                           "1800,0,25,-15\n1800,300,25,-90\n")
+    out = tmp_path / "case" / "conditions"
+    assert main(["conditions", "--case", str(CASE), "--stiffness", str(stiffness), "--table", str(path),
+                 "--out", str(out), "--points-per-rev", "4", "--workers", "1", "--quiet"]) == 0
+    doc = json.loads((out / "conditions.json").read_text())
+    th = doc["against_measured"]["thermal_whatif"]
+    assert th["speed_rpm"] == 1800 and th["rows"] == 2 and th["disc_warmer_K"] == [0.0, 2.0, 4.0]
+    assert th["zero_load_gap_change_arcsec_per_K"] > 0          # warmer discs: less free play
+    assert th["bench_zero_load_gap_change_arcsec"] == pytest.approx(5.0)
+    assert th["kelvin_for_bench_zero_load_gap_change"] == pytest.approx(5.0 / th["zero_load_gap_change_arcsec_per_K"])
+    row = [r for r in operating_rows(tmp_path / "case") if r.quantity.startswith("what-if, not the prediction: discs")]
+    assert len(row) == 1 and "arcsec/K" in row[0].value and "100 -> 1800 rpm" in row[0].reference
+
+
 @pytest.mark.skipif(not (MEASURED / "conditions_25C.csv").exists(),
                     reason="../shared/measured/conditions_25C.csv absent (the real bench map is not shipped)")
 def test_the_real_bench_table_passes_the_contract():
@@ -144,6 +163,48 @@ def test_gap_lines_split_the_error_into_the_wind_up_and_the_zero_load_gap():
     assert r["gap_rms_error_on_lines_arcsec"] == pytest.approx(20.0)
     assert r["gap_rms_error_with_bench_zero_load_gaps_arcsec"] == pytest.approx(0.0, abs=1e-9)
     assert r["gap_rms_error_with_bench_slopes_arcsec"] == pytest.approx(20.0)
+
+
+def test_warmer_discs_grow_about_their_centre_and_close_the_free_play_by_eps_times_r_minus_rr():
+    """dynamics.thermal: the disc's profile, crank-hole circle and bores scale by 1 + alpha dT (first
+    order); the free play (geometry.clearance.backlash) falls as the flank moves out by eps (R - Rr)
+    against the pins, i.e. by the same angle as an offset modification of that size."""
+    from dynamics.thermal import STEEL_EXPANSION_PER_K as alpha, warmer_discs
+    from geometry.clearance import backlash_arcmin
+    case = load_case(CASE)
+    hot = warmer_discs(case, 4.0)
+    eps = alpha * 4.0
+    c, m = case.cycloid, case.modification
+    assert hot.modification.offset_mm == pytest.approx(m.offset_mm + eps * c.pin_circle_radius_mm, rel=1e-12)
+    assert hot.modification.equidistant_mm == pytest.approx(m.equidistant_mm + eps * c.pin_radius_mm, rel=1e-12)
+    assert hot.errors.crank_hole_position_um[0] == pytest.approx(eps * case.carrier.crank_circle_radius_mm * 1e3)
+    assert hot.errors.turning_arm_clearance_um == pytest.approx(eps * case.disc.crank_hole_radius_mm * 1e3)
+    moved = case.replace("modification", offset_mm=m.offset_mm + eps * (c.pin_circle_radius_mm - c.pin_radius_mm))
+    assert backlash_arcmin(hot) < backlash_arcmin(case)
+    assert backlash_arcmin(hot) == pytest.approx(backlash_arcmin(moved), rel=0.02)
+    assert warmer_discs(case, 0.0) == case
+    with pytest.raises(ValueError, match="allowed finite and >= 0"):
+        warmer_discs(case, -1.0)
+
+
+def test_the_thermal_what_if_reads_the_change_per_kelvin_and_the_kelvin_the_bench_s_change_asks():
+    from dynamics.conditions import thermal_whatif
+    T = [100.0, 500.0, 1000.0, 1800.0]
+    # the model: zero-load gap -50 + 3 dT arcsec, wind-up -0.145 (1 - 0.001 dT)
+    gaps = {dT: [-50.0 + 3.0 * dT - 0.145 * (1 - 0.001 * dT) * t for t in T] for dT in (0.0, 2.0, 4.0)}
+    lines = {"100": {"measured_zero_load_gap_arcsec": -43.0, "measured_arcsec_per_Nm": -0.28},
+             "1800": {"measured_zero_load_gap_arcsec": -31.0, "measured_arcsec_per_Nm": -0.24}}
+    out = thermal_whatif(T, gaps, lines, 1800.0)
+    assert out["zero_load_gap_change_arcsec_per_K"] == pytest.approx(3.0)
+    assert out["wind_up_change_pct_per_K"] == pytest.approx(-0.1)
+    assert out["bench_zero_load_gap_change_arcsec"] == pytest.approx(12.0)
+    assert out["kelvin_for_bench_zero_load_gap_change"] == pytest.approx(4.0)
+    assert out["bench_wind_up_change_pct"] == pytest.approx(-100 / 7)
+    assert out["kelvin_for_bench_wind_up_change"] == pytest.approx(1000 / 7)
+    # a change of the other sign cannot be reached by warming: no kelvin
+    lines["1800"]["measured_zero_load_gap_arcsec"] = -50.0
+    assert thermal_whatif(T, gaps, lines, 1800.0)["kelvin_for_bench_zero_load_gap_change"] is None
+    assert thermal_whatif([100.0] * 4, gaps, lines, 1800.0) is None
 
 
 def test_a_torque_flange_in_the_bench_chain_adds_its_twist_to_every_gap():
