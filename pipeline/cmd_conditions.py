@@ -103,9 +103,8 @@ def _efficiency_task(case, stiffness, temp):
              for n in CHART_OUTPUT_RPM] for q in CHART_TORQUE_PCT]
 
 
-def _measured_gaps(table) -> np.ndarray | None:
-    """The table's measured gaps, where it has a numeric gap column."""
-    col = "gap_fw_minus_bw_arcsec"
+def _measured(table, col: str = "gap_fw_minus_bw_arcsec") -> np.ndarray | None:
+    """A measured column of the table (default the gaps), where it has it and it is numeric."""
     if col not in table.header:
         return None
     i = table.header.index(col)
@@ -118,7 +117,7 @@ def _measured_gaps(table) -> np.ndarray | None:
 def _thermal_rows(table) -> tuple[float, list[int]] | None:
     """(speed, row indices) of the thermal what-if: the fastest speed with two torques or more, where
     the table has measured gaps (the what-if sets the model's change beside the bench's)."""
-    if _measured_gaps(table) is None:
+    if _measured(table) is None:
         return None
     for s in sorted({r.input_speed_rpm for r in table.rows}, reverse=True):
         idx = [i for i, r in enumerate(table.rows) if r.input_speed_rpm == s]
@@ -131,7 +130,7 @@ def _measured_comparison(table, results, thermal_gaps: dict | None = None) -> di
     """Gap error RMS (with and without friction) and gap per N m per speed, where the table has gaps;
     thermal_gaps {dT: gaps at the _thermal_rows} adds the thermal what-if."""
     from dynamics.conditions import chain_whatifs, gap_lines, thermal_whatif
-    meas = _measured_gaps(table)
+    meas = _measured(table)
     if meas is None:
         return None
     pred = np.array([r["gap_fw_minus_bw_arcsec"] for r in results])
@@ -295,14 +294,6 @@ def _pictures(out: Path, case, table, results, doc) -> None:
 
     from pipeline.figures_conditions import efficiency_chart, gap_map
 
-    def measured(col):
-        if col not in table.header:
-            return None
-        i = table.header.index(col)
-        try:
-            return np.array([float(r.fields[i]) for r in table.rows])
-        except ValueError:
-            return None
     speed = [r.input_speed_rpm for r in table.rows]
     torque = [r.torque_Nm for r in table.rows]
     cmp = doc["against_measured"]
@@ -310,8 +301,8 @@ def _pictures(out: Path, case, table, results, doc) -> None:
                                    f"(frictionless {cmp['gap_rms_error_frictionless_arcsec']:.1f})")
     gap_map(out / "gap_map.png", speed, torque, [r["gap_fw_minus_bw_arcsec"] for r in results],
             [r["gap_frictionless_arcsec"] for r in results], [r["te_pp_fw_arcsec"] for r in results],
-            [r["te_pp_bw_arcsec"] for r in results], gap_meas=measured("gap_fw_minus_bw_arcsec"),
-            pp_fw_meas=measured("te_pp_fw_arcsec"), pp_bw_meas=measured("te_pp_bw_arcsec"),
+            [r["te_pp_bw_arcsec"] for r in results], gap_meas=_measured(table),
+            pp_fw_meas=_measured(table, "te_pp_fw_arcsec"), pp_bw_meas=_measured(table, "te_pp_bw_arcsec"),
             title=textwrap.fill(f"{case.name}: operating map{tail}" + (
                 f" (extension: {', '.join(doc['diagnosis_causes'])})" if doc["diagnosis_causes"] else ""), 110))
     ch, pub = doc["efficiency_chart"], PUBLISHED_EFFICIENCY
