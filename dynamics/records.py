@@ -336,12 +336,15 @@ def _slow_table(path, rows, linenos, idx, names):
 
 
 _ALLOWED = f"a record is a UTF-8 text CSV with the header {','.join(COLUMNS)}"
+# the real bench records are < 0.5 MB; 256 MiB is ~5 million samples (over 8 min at 10 kHz): a larger
+# file is refused before it is read (parsed, it would take several times its size in memory)
+RECORD_MAX_BYTES = 256 * 2**20
 
 
 def _text_lines(path: Path) -> list[str]:
     """The lines of a record file; anything that is not a readable UTF-8 text file is refused."""
     return read_text(path, what="record", error=RecordError, allowed=_ALLOWED, refuse_nul=True,
-                     wording={"missing": "record not found"}).splitlines()
+                     max_bytes=RECORD_MAX_BYTES, wording={"missing": "record not found"}).splitlines()
 
 
 def _is_number(s: str) -> bool:
@@ -369,11 +372,11 @@ def _check_steps(path: Path, linenos, t, a_in, a_out) -> None:
         if jump.size:
             k = jump[0] + 1
             gap = dt[k - 1] > _GAP_STEPS * float(np.median(dt))
-            why = (f"in a time gap of {dt[k - 1]:g} s, {step[k - 1] - rate * dt[k - 1]:+.3f} deg more than "
+            why = (f"in a time gap of {dt[k - 1]:g} s, {step[k - 1] - rate * dt[k - 1]:+.6g} deg more than "
                    f"the speed explains: the run is not continuous across it" if gap else
                    f"the angle is wrapped, not unwrapped (steps must stay below {_MAX_STEP_DEG:g} deg; "
                    f"unwrap it, e.g. numpy.unwrap)")
-            raise RecordError(f"{path}: row {linenos[k]}: {name} jumps by {step[k - 1]:+.3f} deg "
+            raise RecordError(f"{path}: row {linenos[k]}: {name} jumps by {step[k - 1]:+.6g} deg "
                               f"between samples: {why}")
 
 

@@ -428,7 +428,7 @@ def load_mesh3d(path: str | Path, case=None, **expect: str | float) -> Mesh3D:
         raise MeshError(f"{path}: mesh not found (run `python -m pipeline mesh` first)")
     try:
         z = np.load(path)
-    except (OSError, ValueError, zipfile.BadZipFile) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:   # EOFError: an empty file
         raise MeshError(f"{path}: not a mesh of the mesh stage ({exc}); rerun `python -m pipeline mesh`") from None
     with z:
         made = None

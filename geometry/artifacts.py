@@ -108,12 +108,18 @@ def read_text(path: str | Path, *, what: str, error: type = InputError, name: st
         raise fail("not_utf8", byte=raw[exc.start], offset=exc.start) from None
 
 
+# the stages' JSON artifacts are kilobytes (the largest, signatures.json, ~75 kB): a user-given file
+# above this is not one of them, and reading it whole could exhaust the memory
+JSON_MAX_BYTES = 64 * 2**20
+
+
 def read_json(path: str | Path, *, name: str, missing_hint: str, error: type = InputError):
     """The JSON content of an artifact, or one `error` line naming it (`name`: how the user gave it,
     e.g. "--diagnosis DIR/diagnosis.json"): missing (with `missing_hint`: the command that makes it),
-    not JSON / not UTF-8, or unreadable (a folder, no permission): `read_text`'s ladder."""
+    not JSON / not UTF-8, larger than JSON_MAX_BYTES, or unreadable (a folder, no permission):
+    `read_text`'s ladder."""
     text = read_text(path, what="JSON", error=error, name=name, missing_hint=missing_hint,
-                     wording={"missing": "not found"})
+                     max_bytes=JSON_MAX_BYTES, wording={"missing": "not found"})
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:

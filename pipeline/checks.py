@@ -89,8 +89,15 @@ def _writable_anchor(option: str, path: Path, shown: Path | None = None) -> Path
     return anchor
 
 
+def _not_empty(option: str, path: str | os.PathLike) -> None:
+    """An empty path is Path('.'): the artifacts would land in the current folder, the run lock above it."""
+    if not os.fspath(path).strip():
+        raise InputError(f"{option} {os.fspath(path)!r}: an empty path; give the output's path")
+
+
 def out_folder(option: str, path: str | os.PathLike) -> Path:
     """An output folder: existing and writable, or creatable (nothing is created here)."""
+    _not_empty(option, path)
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise InputError(f"{option} {path}: is an existing file, this stage writes a folder; "
@@ -101,6 +108,7 @@ def out_folder(option: str, path: str | os.PathLike) -> Path:
 
 def out_file(option: str, path: str | os.PathLike) -> Path:
     """An output file: not a folder, in a folder that is (or can be made) writable."""
+    _not_empty(option, path)
     text, path = os.fspath(path), Path(path)
     if path.is_dir() or text.endswith(("/", os.sep)):
         raise InputError(f"{option} {text}: is a folder, this stage writes one file; give a file path")

@@ -10,7 +10,6 @@ diagnosis_made_from.json sidecar) or one with no extension is refused in one lin
 """
 from __future__ import annotations
 
-import json
 import math
 import sys
 from pathlib import Path
@@ -45,13 +44,26 @@ def read_model_parameters(path: str | Path, case) -> dict:
     d = read_json(path, name=f"--diagnosis {path}", missing_hint="run `python -m pipeline diagnose` first",
                   error=CompensateError)
     ext = d.get("extension") if isinstance(d, dict) else None
-    mp = (ext or {}).get("parameters", {}).get("model_parameters") if isinstance(ext, dict) else None
+    params = ext.get("parameters") if isinstance(ext, dict) else None
+    mp = params.get("model_parameters") if isinstance(params, dict) else None
     if not isinstance(mp, dict) or not mp:
         raise CompensateError(f"--diagnosis {path}: no extended model (extension null or without "
                               f"model_parameters): nothing to compensate beyond the model as given")
+    for cause, given in mp.items():     # the shape diagnose writes: {cause: {parameter: number}}
+        if not isinstance(given, dict):
+            raise CompensateError(f"--diagnosis {path}: model_parameters.{cause} = {given!r:.60}: allowed an "
+                                  f"object {{parameter: number}} (as `diagnose` writes it)")
+        for name, v in given.items():
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise CompensateError(f"--diagnosis {path}: model_parameters.{cause}.{name} = {v!r:.60}: "
+                                      f"allowed a number")
     side = path.with_name("diagnosis_made_from.json")
     if side.exists():
-        made = json.loads(side.read_text()).get("made_from", {})
+        shown = f"--diagnosis {path}: its sidecar {side}"
+        made = read_json(side, name=shown, missing_hint="rerun diagnose", error=CompensateError)
+        made = made.get("made_from") if isinstance(made, dict) else None
+        if not isinstance(made, dict):
+            raise CompensateError(f"{shown}: no made_from object (as `diagnose` writes it): rerun diagnose")
         if made.get("case_fingerprint") not in (None, case_fingerprint(case)):
             raise CompensateError(f"--diagnosis {path}: made for case {made.get('case')!r} "
                                   f"({made.get('case_source')}), not this version of {case.name}: rerun diagnose")

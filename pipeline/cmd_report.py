@@ -10,6 +10,7 @@ from pathlib import Path
 from geometry.artifacts import InputError
 from geometry.fingerprint import case_fingerprint
 from geometry.params import load_case
+from pipeline import checks
 from pipeline.report import build_report
 
 
@@ -25,7 +26,14 @@ def case_folder(build: str | Path, name: str) -> Path:
 
 def run(args) -> int:
     case = load_case(args.case)
-    path = build_report(case_folder(args.build, case.name), case.name, case_fingerprint(case),
+    build = Path(args.build)
+    if not args.build.strip() or not build.is_dir():   # a mistyped --build would get a report of nothing
+        what = "an empty path" if not args.build.strip() else "is a file" if build.exists() else "no such folder"
+        raise InputError(f"--build {args.build!r}: {what}; allowed "
+                         f"the build folder that holds {case.name}/ (`make all` writes build/)")
+    folder = case_folder(build, case.name)
+    checks.out_folder("report folder", folder / "report")
+    path = build_report(folder, case.name, case_fingerprint(case),
                         rated_torque_Nm=case.rated_torque_Nm, ratio=case.ratio)
     if not args.quiet:
         print(f"report: {path}")

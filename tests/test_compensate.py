@@ -92,3 +92,50 @@ def test_a_model_parameter_outside_its_physical_range_is_refused():
         extended_model(CASE, STIFF, {"output_coaxiality": {"coaxiality_cos_um": 1e4, "coaxiality_sin_um": 0.0}})
     with pytest.raises(ValueError, match="not registered"):
         extended_model(CASE, STIFF, {"gear_rattle": {}})
+
+
+@pytest.mark.parametrize("edit, needle", [
+    (lambda d: d["extension"].update(parameters=[1]), "no extended model"),
+    (lambda d: d["extension"]["parameters"]["model_parameters"].update(output_coaxiality=5),
+     "model_parameters.output_coaxiality = 5: allowed an object"),
+    (lambda d: d["extension"]["parameters"]["model_parameters"]["output_coaxiality"].update(coaxiality_cos_um=[1, 2]),
+     "model_parameters.output_coaxiality.coaxiality_cos_um = [1, 2]: allowed a number"),
+    (lambda d: d["extension"]["parameters"]["model_parameters"]["output_coaxiality"].update(coaxiality_cos_um=None),
+     "coaxiality_cos_um = None: allowed a number"),
+    (lambda d: d["extension"]["parameters"]["model_parameters"]["output_coaxiality"].update(
+        coaxiality_cos_um=float("nan")), "coaxiality_cos_um = nan outside"),
+])
+def test_a_malformed_extension_is_one_clear_line_not_a_traceback(tmp_path, capsys, edit, needle):
+    save(STIFF, tmp_path / "stiffness.json")
+    path = _diagnosis(tmp_path, [draw_effect(np.random.default_rng(0), CASE, "output_coaxiality")])
+    d = json.loads(path.read_text())
+    edit(d)
+    path.write_text(json.dumps(d))
+    (tmp_path / "comp").mkdir()
+    (tmp_path / "comp" / "compensation.csv").write_text("earlier\n")
+    rc = main(["compensate", "--case", str(CASE_PATH), "--out", str(tmp_path / "comp"), "--stiffness",
+               str(tmp_path / "stiffness.json"), "--diagnosis", str(path)])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.startswith("error: ") and err.count("\n") == 1 and needle in err, err
+    assert (tmp_path / "comp" / "compensation.csv").read_text() == "earlier\n"
+
+
+@pytest.mark.parametrize("side, needle", [(b"\xa3\x01 binary", "not UTF-8 text"), (b"{nope", "not valid JSON"),
+                                          (b"[1]", "no made_from object"), (b'{"made_from": [1]}', "no made_from")])
+def test_a_broken_made_from_sidecar_is_one_clear_line_naming_it(tmp_path, capsys, side, needle):
+    save(STIFF, tmp_path / "stiffness.json")
+    path = _diagnosis(tmp_path, [draw_effect(np.random.default_rng(0), CASE, "output_coaxiality")])
+    (path.parent / "diagnosis_made_from.json").write_bytes(side)
+    rc = main(["compensate", "--case", str(CASE_PATH), "--out", str(tmp_path / "comp"), "--stiffness",
+               str(tmp_path / "stiffness.json"), "--diagnosis", str(path)])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and "diagnosis_made_from.json" in err and needle in err, err
+
+
+def test_a_diagnosis_file_larger_than_any_artifact_is_refused_before_it_is_read(tmp_path, capsys, monkeypatch):
+    import geometry.artifacts as artifacts
+    path = _diagnosis(tmp_path, [])
+    monkeypatch.setattr(artifacts, "JSON_MAX_BYTES", 10)    # a 30 GB file read whole ran out of memory
+    rc = main(["compensate", "--case", str(CASE_PATH), "--out", str(tmp_path / "comp"), "--diagnosis", str(path)])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and "a JSON file has at most 10 bytes" in err, err

@@ -150,3 +150,13 @@ def test_a_spreadsheet_byte_order_mark_is_not_part_of_the_header(tmp_path):
     p = _record(tmp_path, comments=())
     p.write_bytes(b"\xef\xbb\xbf" + p.read_bytes())
     assert read_record(p).time_s[-1] == pytest.approx(2.0)
+
+
+def test_a_record_larger_than_the_cap_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    import dynamics.records as records
+    p = _record(tmp_path)
+    monkeypatch.setattr(records, "RECORD_MAX_BYTES", 100)     # a 30 GB file read whole ran out of memory
+    monkeypatch.setattr(Path, "read_bytes", lambda self: pytest.fail("read before its size was checked"))
+    with pytest.raises(RecordError) as e:
+        read_record(p)
+    _one_line_naming(e, p, "a record file has at most 100 bytes")

@@ -186,6 +186,34 @@ def test_the_report_never_writes_outside_the_build_folder(tmp_path, name, capsys
     assert sorted(p for p in tmp_path.rglob("*")) == before      # nothing written anywhere
 
 
+@pytest.mark.parametrize("build, needle", [("missing", "no such folder"), ("afile", "is a file"), ("", "an empty path")])
+def test_a_build_folder_that_is_not_one_is_refused_instead_of_an_empty_report(tmp_path, build, needle, capsys,
+                                                                               monkeypatch):
+    from pipeline.cli import main
+    from support import case_path
+    monkeypatch.chdir(tmp_path)      # an empty --build is the current folder: nothing may land there
+    (tmp_path / "afile").write_text("x")
+    before = sorted(p for p in tmp_path.rglob("*"))
+    assert main(["report", "--case", str(case_path("rv40e-81")), "--build", build, "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --build ") and err.count("\n") == 1 and needle in err, err
+    assert sorted(p for p in tmp_path.rglob("*")) == before
+
+
+def test_a_report_folder_that_cannot_be_written_is_one_line_naming_it(tmp_path, capsys, monkeypatch):
+    import tempfile
+    from pipeline.cli import main
+    from support import case_path
+    real = tempfile.TemporaryFile
+    # chmod 555 does not stop root (the CI container): make the write probe fail as it would
+    monkeypatch.setattr(tempfile, "TemporaryFile", lambda *a, dir=None, **k: (_ for _ in ()).throw(
+        PermissionError(13, "Permission denied")) if str(dir).startswith(str(tmp_path)) else real(*a, dir=dir, **k))
+    assert main(["report", "--case", str(case_path("rv40e-81")), "--build", str(tmp_path), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: report folder ") and err.count("\n") == 1 and "Permission denied" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_the_case_folder_is_one_plain_level_below_the_build_folder(tmp_path):
     from geometry.artifacts import InputError
     from pipeline.cmd_report import case_folder
