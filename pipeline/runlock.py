@@ -7,7 +7,9 @@ whom it waits for and starts once the first has finished (so `make -j` with two 
 output serialises them instead of failing), or, with `wait=False`, is refused in one line. Either
 way each artifact there is one run's, whole. The kernel drops the lock when the holder exits,
 however it ends (SIGKILL included), so a lock file left behind never blocks a run; a waiter that
-wakes on a file its holder removed takes the lock again on the current one.
+wakes on a file its holder removed takes the lock again on the current one. A flock belongs to the
+open file, which a forked child (a pool worker) shares: each child closes its copy at the fork
+(os.register_at_fork), so workers that outlive a killed run do not hold its output locked.
 """
 from __future__ import annotations
 
@@ -21,6 +23,22 @@ from geometry.artifacts import InputError
 
 class RunLockError(InputError):
     """Another run is writing the same output."""
+
+
+_HELD: set[int] = set()       # descriptors of the locks this process holds
+
+
+def _close_in_child() -> None:
+    """After a fork, in the child: drop the child's references to the parent's locks."""
+    for fd in _HELD:
+        try:
+            os.close(fd)
+        except OSError:
+            pass
+    _HELD.clear()
+
+
+os.register_at_fork(after_in_child=_close_in_child)
 
 
 def lock_path(output: str | os.PathLike) -> Path:
@@ -58,6 +76,7 @@ def acquire(output: str | os.PathLike, what: str, shown: str, *, wait: bool = Tr
         os.close(fd)            # its holder removed it while we waited: lock the current file
     os.ftruncate(fd, 0)
     os.pwrite(fd, f"pid {os.getpid()}: {what}\n".encode(), 0)
+    _HELD.add(fd)
     return fd, path
 
 
@@ -76,6 +95,7 @@ def release(lock: tuple[int, Path] | None) -> None:
     if lock is None:
         return
     fd, path = lock
+    _HELD.discard(fd)
     try:
         if _same_file(fd, path):
             path.unlink()

@@ -190,6 +190,25 @@ def test_the_lock_of_a_killed_run_does_not_block_the_next(tmp_path):
     runlock.release(lock)
 
 
+def test_a_killed_run_s_forked_workers_do_not_hold_its_lock(tmp_path):
+    """A pool worker is a fork of the run: it shares the run's open lock file, and a flock lasts while
+    any copy is open; each child closes its copy at the fork, so the next run starts at once although
+    the killed run's worker lives on."""
+    code = ("import os, signal, sys, time; from pipeline import runlock; "
+            f"runlock.acquire({str(tmp_path / 'out')!r}, 'doomed', 'x')\n"
+            "pid = os.fork()\n"
+            "if pid == 0:\n    os.close(1); os.close(2); time.sleep(60); os._exit(0)\n"
+            "print(pid, flush=True); os.kill(os.getpid(), signal.SIGKILL)")
+    run = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
+    child = int(run.stdout.split()[0])
+    try:
+        os.kill(child, 0)                                               # the worker outlives the run
+        lock = runlock.acquire(tmp_path / "out", "next", "x", wait=False)
+        runlock.release(lock)
+    finally:
+        os.kill(child, signal.SIGKILL)
+
+
 # ------------------------------------------------------------------ full disk
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux) for a real ENOSPC")
 def test_a_full_disk_is_one_line_and_leaves_every_earlier_artifact_intact(tmp_path, monkeypatch, capsys):
