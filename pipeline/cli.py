@@ -43,7 +43,8 @@ class UsageError(InputError):
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message):    # one `error:` line and exit 2 like every other user error
-        raise UsageError(f"{message} (`{self.prog} --help` lists the options)")
+        # the top-level parser reports a command's unknown options: point at that command's help
+        raise UsageError(f"{message} (`{getattr(self, 'help_prog', self.prog)} --help` lists the options)")
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -54,6 +55,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         epilog="commands: " + "; ".join(f"{k}: {h}" for k, (_, h) in COMMANDS.items()))
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     if command in COMMANDS:
+        parser.help_prog = f"{parser.prog} {command}"
         importlib.import_module(COMMANDS[command][0]).register(sub)
     else:
         for name, (_, help_text) in COMMANDS.items():   # listed for --help and error messages

@@ -68,6 +68,9 @@ def _corpus(tmp_path, stiffness):
           tmp_path / "d"], "back.csv"),
         (["diagnose", "--case", CASE, "--stiffness", stiffness, "--measured", cols, "--out",
           tmp_path / "d"], "cols.csv"),
+        # an unknown option points at the command's own help, where the options are
+        (["fourbar", "--case", CASE, "--out", tmp_path / "f", "--frob", "3"],
+         "unrecognized arguments: --frob 3 (`python -m pipeline fourbar --help` lists the options)"),
     ]
 
 
@@ -118,3 +121,17 @@ def test_a_stage_killed_midway_leaves_no_partial_artifact_and_the_rerun_complete
     assert rerun.returncode == 0, rerun.stderr
     assert {"profile.csv", "disc.step", "pin.step", "crankshaft.step", "assembly.png"} <= \
         {p.name for p in out.iterdir()}
+
+
+@pytest.mark.parametrize("argv", [["fourbar", "--points", "3"], ["simulate", "--load", "constant:100"]])
+@pytest.mark.parametrize("out", ["", " "])
+def test_an_empty_out_path_is_refused_instead_of_writing_into_the_current_folder(tmp_path, monkeypatch, capsys,
+                                                                                 argv, out):
+    from pipeline.cli import main
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)          # Path("") is ".": the artifacts would land here, the run lock in tmp_path
+    rc = main([argv[0], "--case", str(CASE), "--stiffness", str(tmp_path / "none.json"), *argv[1:], "--out", out])
+    err = capsys.readouterr().err
+    assert rc == 2 and err == f"error: --out {out!r}: an empty path; give the output's path\n", err
+    assert list(tmp_path.rglob("*")) == [work] and list(work.iterdir()) == []
