@@ -72,8 +72,10 @@ VARIANTS: tuple[Variant, ...] = (
                                  Edit("disc", "crank_hole_radius_mm", "follow")),
             "crank section at the eccentrics; the disc's crank hole follows (same needles)"),
     Variant("disc_width", (Edit("cycloid", "width_mm", "scale", 1.10),
-                           Edit("crankshaft", "needle_length_mm", "scale", 1.10)),
-            "tooth contact, needle and disc-body length (needles as long as the disc)"),
+                           Edit("crankshaft", "needle_length_mm", "scale", 1.10),
+                           Edit("housing", "pin_ring_length_mm", "scale", 1.10)),
+            "tooth contact, needle and disc-body length (needles as long as the disc; the pin ring "
+            "still spans the disc stack)"),
     Variant("needle_count", (Edit("crankshaft", "needle_count", "add", -4),),
             "turning-arm needle bearing: fewer needles share the load"),
     Variant("modification", (Edit("modification", "offset_mm", "scale", 1.5),

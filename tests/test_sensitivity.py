@@ -34,6 +34,16 @@ def test_a_variant_edits_its_size_and_the_sizes_tied_to_it_and_the_case_still_va
     assert "# ASSUMED: needle inner race  # sensitivity eccentric_radius: was 12.0" in text
 
 
+@pytest.mark.parametrize("name", ["rv40e-81", "rv40e-105", "rv160n-81"])
+def test_every_variant_of_every_shipped_case_is_a_valid_case(name):
+    # a wider disc needs a longer pin ring (the housing spans the disc stack): the RV-160N's variant
+    # failed validation before the ring followed
+    text = case_path(name).read_text()
+    for v in BY_NAME.values():
+        case = case_from_dict(tomllib.loads(edited(text, v, f"{name}-{v.name}")[0]))
+        assert case.name == f"{name}-{v.name}"
+
+
 def test_width_is_not_face_width_and_integers_stay_integers():
     text, _ = edited(TEXT, BY_NAME["disc_width"], "x")
     var = tomllib.loads(text)
