@@ -79,11 +79,29 @@ def run_tasks(func: Callable[..., Any], tasks: Sequence[tuple], *, workers: int 
     return _run_local(func, tasks, workers, progress)
 
 
-def _worker_init() -> None:
+PR_SET_PDEATHSIG = 1           # linux/prctl.h
+
+
+def die_with_parent(parent: int) -> None:
+    """Linux: the kernel kills this worker (SIGKILL) when the run that forked it ends, however it
+    ends; a SIGKILLed run would otherwise leave its workers computing for nobody until their task
+    ends. Elsewhere (no prctl) a no-op. `parent`: the run's pid, to catch a run that died before
+    the request was made."""
+    try:
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:
+        os._exit(1)
+
+
+def _worker_init(parent: int) -> None:
     # SIGTERM kills a worker at once (the parent terminates the pool and clears its temporaries);
     # Ctrl-C reaches the whole process group, only the parent acts on it.
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent(parent)
 
 
 def _run_local(func, tasks, workers, progress) -> list:
@@ -92,7 +110,8 @@ def _run_local(func, tasks, workers, progress) -> list:
     breaks, finished = 0, 0
     while True:
         todo = [k for k in range(len(tasks)) if not done[k]]
-        pool = ProcessPoolExecutor(max_workers=min(workers, len(todo)), initializer=_worker_init)
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(todo)), initializer=_worker_init,
+                                   initargs=(os.getpid(),))
         try:
             futures = {k: pool.submit(func, *tasks[k]) for k in todo}
             for k in todo:                        # in order: a broken pool fails the first unfinished

@@ -25,6 +25,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -207,6 +208,46 @@ def test_a_killed_run_s_forked_workers_do_not_hold_its_lock(tmp_path):
         runlock.release(lock)
     finally:
         os.kill(child, signal.SIGKILL)
+
+
+def test_a_killed_run_s_pool_workers_end_with_it(tmp_path):
+    """pipeline.sweep's workers ask the kernel for SIGKILL when the run that forked them ends: a
+    SIGKILLed run leaves no worker computing for nobody (each task here would sleep a minute)."""
+    pids = tmp_path / "pids"
+    code = ("import os, time, sys; from pipeline.sweep import run_tasks\n"
+            "def task(path, k):\n"
+            "    with open(path, 'a') as f: f.write(f'{os.getpid()}\\n')\n"
+            "    time.sleep(60); return k\n"
+            f"run_tasks(task, [({str(pids)!r}, 0), ({str(pids)!r}, 1)], workers=2)\n")
+    run = subprocess.Popen([sys.executable, "-c", code], cwd=ROOT, stdout=subprocess.DEVNULL,
+                           stderr=subprocess.DEVNULL)
+    try:
+        for _ in range(300):
+            if pids.exists() and len(pids.read_text().split()) == 2:
+                break
+            time.sleep(0.1)
+        workers = [int(p) for p in pids.read_text().split()]
+        run.kill()
+        run.wait(timeout=30)
+        deadline = time.monotonic() + 10
+        alive = workers
+        while alive and time.monotonic() < deadline:
+            alive = [p for p in workers if _alive(p)]
+            time.sleep(0.1)
+        assert not alive, f"workers {alive} outlived their run"
+    finally:
+        for p in [int(p) for p in pids.read_text().split()] if pids.exists() else []:
+            if _alive(p):
+                os.kill(p, signal.SIGKILL)
+
+
+def _alive(pid: int) -> bool:
+    """A live process (a zombie, dead but not yet reaped by init, counts as gone)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except (FileNotFoundError, ProcessLookupError, IndexError):
+        return False
 
 
 # ------------------------------------------------------------------ full disk

@@ -323,7 +323,9 @@ def process_pool(workers: int | None):
     n = (os.cpu_count() or 1) if workers is None else int(workers)
     if n <= 1 or "fork" not in mp.get_all_start_methods():
         return None
-    return ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("fork"))
+    from pipeline.sweep import die_with_parent
+    return ProcessPoolExecutor(max_workers=n, mp_context=mp.get_context("fork"), initializer=die_with_parent,
+                               initargs=(os.getpid(),))
 
 
 def _steady(case, record: BenchRecord) -> bool:
