@@ -147,6 +147,15 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"error: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
         return 2
+    except MemoryError:
+        # inputs are bounded before heavy work; what still exhausts the memory (a large case on a small
+        # machine, many workers) ends like an interrupt: one line, no partial artifact
+        if args is not None:
+            _clear_temps(args)
+        what = f"`{args.command}`" if args is not None else "the command line"
+        print(f"error: {what} ran out of memory; no partial artifact was written (fewer --workers or a "
+              f"coarser mesh or grid need less)", file=sys.stderr)
+        return 2
     except KeyboardInterrupt as exc:
         if args is not None:
             _clear_temps(args)

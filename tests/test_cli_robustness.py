@@ -135,3 +135,20 @@ def test_an_empty_out_path_is_refused_instead_of_writing_into_the_current_folder
     err = capsys.readouterr().err
     assert rc == 2 and err == f"error: --out {out!r}: an empty path; give the output's path\n", err
     assert list(tmp_path.rglob("*")) == [work] and list(work.iterdir()) == []
+
+
+def test_running_out_of_memory_is_one_line_and_leaves_no_temporary(tmp_path, monkeypatch, capsys):
+    from pipeline import cmd_fourbar
+    from pipeline.cli import main
+    out = tmp_path / "fb"
+    out.mkdir()
+    (out / "earlier.json").write_text("{}")
+
+    def exhausted(args):
+        (out / ".fourbar.abcdefgh.json").write_text("{")       # a write in progress
+        raise MemoryError
+    monkeypatch.setattr(cmd_fourbar, "run_fourbar", exhausted)
+    assert main(["fourbar", "--case", str(CASE), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: `fourbar` ran out of memory;") and err.count("\n") == 1, err
+    assert sorted(p.name for p in out.iterdir()) == ["earlier.json"]
