@@ -126,9 +126,9 @@ def _thermal_rows(table) -> tuple[float, list[int]] | None:
     return None
 
 
-def _measured_comparison(table, results, thermal_gaps: dict | None = None) -> dict | None:
+def _measured_comparison(table, results, thermal_gaps: dict | str | None = None) -> dict | None:
     """Gap error RMS (with and without friction) and gap per N m per speed, where the table has gaps;
-    thermal_gaps {dT: gaps at the _thermal_rows} adds the thermal what-if."""
+    thermal_gaps {dT: gaps at the _thermal_rows} adds the thermal what-if (a string: why it was skipped)."""
     from dynamics.conditions import chain_whatifs, gap_lines, thermal_whatif
     meas = _measured(table)
     if meas is None:
@@ -142,8 +142,8 @@ def _measured_comparison(table, results, thermal_gaps: dict | None = None) -> di
     slopes = {k: {"measured_arcsec_per_Nm": v["measured_arcsec_per_Nm"], "predicted_arcsec_per_Nm": v["predicted_arcsec_per_Nm"],
                   "frictionless_arcsec_per_Nm": friction_free[k]["predicted_arcsec_per_Nm"], "rows": v["rows"]}
               for k, v in lines["by_speed_rpm"].items()}
-    thermal = None
-    if thermal_gaps:
+    thermal = {"skipped": thermal_gaps} if isinstance(thermal_gaps, str) else None
+    if isinstance(thermal_gaps, dict) and thermal_gaps:
         s, idx = _thermal_rows(table)
         thermal = thermal_whatif(torque[idx], {0.0: pred[idx], **thermal_gaps}, lines["by_speed_rpm"], s)
     return {"rows": len(meas), "gap_rms_error_arcsec": float(np.sqrt(np.mean((pred - meas) ** 2))),
@@ -198,13 +198,18 @@ def run(args) -> int:
     tasks = [("case", case, stiffness)] + [("chart", case, stiffness, t) for t in temps] \
         + [("rows", case, stiffness, rows[i:i + ROWS_PER_TASK], ppr) for i in range(0, len(rows), ROWS_PER_TASK)] \
         + [("noload", case, stiffness, s, t, ppr) for s, t in pairs]
-    hot = _thermal_rows(table)
+    hot, thermal_skipped = _thermal_rows(table), None
     if hot is not None:
         from dynamics.conditions import DISC_WARMER_K
         from dynamics.thermal import warmer_discs
         hot_rows = [rows[i] for i in hot[1]]
-        tasks += [("thermal", warmer_discs(case, dT), stiffness, hot_rows[i:i + ROWS_PER_TASK], ppr, dT)
-                  for dT in DISC_WARMER_K for i in range(0, len(hot_rows), ROWS_PER_TASK)]
+        try:       # a what-if never stops the prediction: a case the warm discs make invalid skips it
+            warm = {dT: warmer_discs(case, dT) for dT in DISC_WARMER_K}
+        except (InputError, ValueError) as exc:
+            thermal_skipped = f"discs {max(DISC_WARMER_K):g} K warmer make an invalid case ({exc})"
+        else:
+            tasks += [("thermal", warm[dT], stiffness, hot_rows[i:i + ROWS_PER_TASK], ppr, dT)
+                      for dT in DISC_WARMER_K for i in range(0, len(hot_rows), ROWS_PER_TASK)]
     done = run_tasks(_task, tasks, workers=args.workers, scheduler=args.scheduler)
     kinds = [t[0] for t in tasks]
     thermal_gaps: dict = {}
@@ -219,7 +224,8 @@ def run(args) -> int:
                                    "temperature_C": temps, "efficiency": chart}
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    _write(out, args, base_case, base_stiffness, lub, table, results, no_load, summary, causes, ppr, thermal_gaps)
+    _write(out, args, base_case, base_stiffness, lub, table, results, no_load, summary, causes, ppr,
+           thermal_skipped or thermal_gaps)
     if not args.quiet:
         cmp = _measured_comparison(table, results)
         tail = "" if cmp is None else (f"; gap RMS error {cmp['gap_rms_error_arcsec']:.1f} arcsec "

@@ -132,6 +132,23 @@ def test_a_table_with_measured_gaps_gets_the_thermal_what_if_and_its_report_row(
     assert len(row) == 1 and "arcsec/K" in row[0].value and "100 -> 1800 rpm" in row[0].reference
 
 
+def test_a_thermal_what_if_the_case_cannot_take_is_skipped_saying_why_not_the_prediction(tmp_path, stiffness,
+                                                                                         monkeypatch):
+    import json
+
+    import dynamics.thermal
+    def invalid(case, dT):
+        raise ValueError("profile cusps")
+    monkeypatch.setattr(dynamics.thermal, "warmer_discs", invalid)
+    path = table(tmp_path, f"{HEAD},gap_fw_minus_bw_arcsec\n1800,0,25,-15\n1800,300,25,-90\n")
+    assert main(["conditions", "--case", str(CASE), "--stiffness", str(stiffness), "--table", str(path),
+                 "--out", str(tmp_path / "out"), "--points-per-rev", "4", "--workers", "1", "--quiet"]) == 0
+    doc = json.loads((tmp_path / "out" / "conditions.json").read_text())
+    assert doc["against_measured"]["thermal_whatif"] == {
+        "skipped": "discs 4 K warmer make an invalid case (profile cusps)"}
+    assert len(doc["rows"]) == 2
+
+
 @pytest.mark.skipif(not (MEASURED / "conditions_25C.csv").exists(),
                     reason="../shared/measured/conditions_25C.csv absent (the real bench map is not shipped)")
 def test_the_real_bench_table_passes_the_contract():
