@@ -80,6 +80,8 @@ def sources(case) -> tuple[Source, ...]:
         Source("pin_radius", "every pin's radius", "um", 1.0, "housing", lambda c, s: {"pin_radius_um": s}),
         Source("pin_circle_radius", "pin circle radius", "um", 1.0, "housing",
                lambda c, s: {"pin_circle_radius_um": s}),
+        Source("pin_ring_tilt", "pin ring axis tilted (centre +-t at the two disc planes)", "um", 1.0, "housing",
+               lambda c, s: {"pin_ring_tilt_um": s}),
         Source("disc_pitch_lobes_m1", "disc 1 cumulative pitch (1 lobe)", "um", 1.0, "carrier",
                lambda c, s: {"disc_pitch_lobes": [[1, 1, s, 0.0]]}),
         Source("disc_pitch_lobes_m2", "disc 1 pitch, 2 lobes", "um", 1.0, "carrier",

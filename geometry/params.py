@@ -198,6 +198,10 @@ class Errors:
     per_pin_tangential_um: tuple = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=())  # + forward
     per_pin_radius_um: tuple = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=())
     pin_radial_lobes: tuple = _rows(("m", True, 1, None), *_LOBE)
+    # pin ring axis tilted against the carrier's: the pin circle's centre moved by +t at disc 1's plane, -t at
+    # disc 2's, toward the phase (ground frame, from pin 1); its zc x lines add between the discs (pin.py)
+    pin_ring_tilt_um: float = _f(-ERROR_UM_MAX, ERROR_UM_MAX, open_lo=False, default=0.0)
+    pin_ring_tilt_phase_deg: float = _f(-360.0, 360.0, default=0.0)
     # pin support (housing groove) stiffness: each pin's law multiplied by 1 + sum a cos(m theta - phase)
     pin_stiffness_lobes: tuple = _rows(("m", True, 1, None), ("amplitude", False, 0.0, 0.9),
                                        ("phase_deg", False, -360.0, 360.0))

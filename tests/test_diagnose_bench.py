@@ -30,11 +30,11 @@ STIFF = support.stiffness_for_tests(CASE)
 PPR = 256
 CASES = [(c, s) for c in ("output_coaxiality", "torsional_stiffness", "backlash") for s in range(4)] \
     + [("crank_eccentricity_error", s) for s in range(3)] \
-    + [(c, s) for c in ("pin_ring_pattern", "housing_stiffness_pattern", "disc_cumulative_pitch",
+    + [(c, s) for c in ("pin_ring_pattern", "pin_ring_tilt", "housing_stiffness_pattern", "disc_cumulative_pitch",
                         "output_reading_lobes") for s in range(2)]
 TRUTH_KEY = {"output_coaxiality": "output_coaxiality_um", "torsional_stiffness": "compliance_factor",
              "backlash": "pin_clearance_um", "crank_eccentricity_error": "crank_eccentricity_error_single_um",
-             "disc_cumulative_pitch": "disc_cumulative_pitch_um"}
+             "disc_cumulative_pitch": "disc_cumulative_pitch_um", "pin_ring_tilt": "pin_ring_tilt_um"}
 # the carrier- and housing-side patterns shift the lost motion at light load (even in their size,
 # `dc_even`): at 3 % rated that shift is named as backlash first; from 10 % rated the lines lead
 TORQUES = {c: (0.1, 0.3, 0.6) for c in ("crank_eccentricity_error", "disc_cumulative_pitch", "pin_ring_pattern")}

@@ -25,7 +25,8 @@ The contacts are the work's candidate contacts: the time integration skips pins 
 more than a margin (dynamics.kernels.CANDIDATE_MARGIN_M); w.gap / w.force hold gap and force.
 As-built errors (case.errors, geometry.params.Errors), all through this same gap and law:
   pins   uniform radius / circle radius, per-pin radial, tangential and radius, pin-ring radial
-         lobes: the pin centres and radii of `pins`; pin support (groove) stiffness lobes: a
+         lobes: the pin centres and radii of `pins`; a tilted pin ring: the centres shifted per
+         disc plane (`plane_shift`, constant: no change of the gradients); pin support (groove) stiffness lobes: a
          multiplier on each pin's law (column 4 of `pins`; the whole series law is scaled, ASSUMED:
          the refitted law does not separate the groove's share);
   seats  pin seats softer than the housing FE (dynamics.couplings.housing.SeatCompliance, a
@@ -67,6 +68,7 @@ class Params(NamedTuple):
     disc_pitch: np.ndarray         # (nd, L, 3) cumulative pitch lobes: m, amplitude [rad], phase [rad]
     disc_profile_lobes: np.ndarray  # (nd, L2, 3) profile lobes: m, amplitude [m], phase [rad]
     dof: np.ndarray                # (nd, 3) disc x, y, rotation
+    plane_shift: np.ndarray        # (nd, 2) pin centres' shift [m] at each disc's plane (Errors.pin_ring_tilt_um)
     housing_phi: np.ndarray        # (zp, 2, nh) pin k's seat displacement (x, y) per housing modal coordinate
     housing_dof: np.ndarray        # (nh,) the housing block's indices (dynamics.couplings.housing)
     c0: int                        # offset of the (nd, zp) contacts in the work's contact arrays
@@ -98,9 +100,20 @@ def params(case, stiffness, layout, slots) -> Params:
         disc_pitch=_disc_lobes(er.disc_pitch_lobes, nd, 1e-6 / R_disc),
         disc_profile_lobes=_disc_lobes(er.disc_profile_lobes, nd, 1e-6),
         dof=np.column_stack([disc.indices("x"), disc.indices("y"), disc.indices("rot")]).astype(np.int64),
+        plane_shift=plane_shift_m(er, nd),
         housing_phi=np.ascontiguousarray(phi),
         housing_dof=np.zeros(0, np.int64) if hm is None else hm[1],
         c0=slots.contacts("pin", (nd, zp), group=np.repeat(np.arange(nd), zp)))
+
+
+def plane_shift_m(er, nd: int) -> np.ndarray:
+    """(nd, 2) the pin centres' shift at each disc's plane from a tilted pin ring: +t at disc 1, -t at
+    disc 2 toward the tilt phase (a single disc: +t, a shift of the ring; more discs: spread linearly
+    between +t and -t, as the planes lie along a tilted axis)."""
+    t = er.pin_ring_tilt_um * 1e-6
+    lever = np.ones(1) if nd == 1 else np.linspace(1.0, -1.0, nd)
+    ph = math.radians(er.pin_ring_tilt_phase_deg)
+    return np.ascontiguousarray(np.outer(t * lever, [math.cos(ph), math.sin(ph)]))
 
 
 def _disc_lobes(rows, nd: int, scale: float) -> np.ndarray:
@@ -169,7 +182,8 @@ def add(q, v, th_in, w_in, beta, want_k, p, w, V, tau_in):
             if not active[c]:
                 forces[c] = 0.0
                 continue
-            Px, Py, rp, thk = pins[k, 0] + hu[k, 0], pins[k, 1] + hu[k, 1], pins[k, 2], pins[k, 3]
+            Px, Py = pins[k, 0] + hu[k, 0] + p.plane_shift[d, 0], pins[k, 1] + hu[k, 1] + p.plane_shift[d, 1]
+            rp, thk = pins[k, 2], pins[k, 3]
             wx, wy = Px - cx, Py - cy
             ca, sa, alk = ca0, sa0, al
             pbx, pby = ca * wx + sa * wy, -sa * wx + ca * wy

@@ -67,7 +67,7 @@ def rates(model: ReducerModel, input_rad: float) -> np.ndarray:
 
 
 @kernel
-def _pin_frames(qs, sel, pins, dof, disc_rotation, R, E, zp):
+def _pin_frames(qs, sel, pins, shift, dof, disc_rotation, R, E, zp):
     """For the selected (disc, pin) pairs at each state of qs (rows): the disc profile's outward normal
     angle at the pin (global) and the curvature of the pin-centre curve there (disc frame)."""
     out = np.empty((qs.shape[0], sel.shape[0], 2))
@@ -76,7 +76,7 @@ def _pin_frames(qs, sel, pins, dof, disc_rotation, R, E, zp):
         for i in range(sel.shape[0]):
             d, k = sel[i, 0], sel[i, 1]
             cx, cy, al = q[dof[d, 0]], q[dof[d, 1]], q[dof[d, 2]] + disc_rotation[d]
-            wx, wy = pins[k, 0] - cx, pins[k, 1] - cy
+            wx, wy = pins[k, 0] + shift[d, 0] - cx, pins[k, 1] + shift[d, 1] - cy
             ca, sa = math.cos(al), math.sin(al)
             seed = al - pins[k, 3]
             seed -= 2.0 * math.pi * math.floor(seed / (2.0 * math.pi) + 0.5)
@@ -131,8 +131,8 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
     if len(hdof):
         pins[:, :2] += np.einsum("kci,i->kc", hphi, q[hdof])
     if len(sel):
-        fr = _pin_frames(np.stack([q, qa, qb]), sel.astype(np.int64), pins, p.dof, p.disc_rotation_rad,
-                         p.R_m, p.E_m, p.zp)
+        fr = _pin_frames(np.stack([q, qa, qb]), sel.astype(np.int64), pins, p.plane_shift, p.dof,
+                         p.disc_rotation_rad, p.R_m, p.E_m, p.zp)
         psi, kappa = fr[0, :, 0], fr[0, :, 1]
         # the normal's turning rate: its angle change along `shape`, times the motion's rate along it
         along = float(dq @ shape) / float(shape @ shape) if shape.any() else 0.0
@@ -143,7 +143,7 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
         dd, kk = sel[:, 0], sel[:, 1]
         rp = p.pins[kk, 2]
         ixyz = p.dof[dd]                                      # (m, 3) disc x, y, rotation
-        r = pins[kk, :2] - rp[:, None] * n - q[ixyz[:, :2]]    # contact point from the disc centre
+        r = pins[kk, :2] + p.plane_shift[dd] - rp[:, None] * n - q[ixyz[:, :2]]   # contact point from the disc centre
         v = dq[ixyz[:, :2]] + dq[ixyz[:, 2]][:, None] * np.column_stack([-r[:, 1], r[:, 0]])
         vs = np.sum(v * t, axis=1)                            # disc sliding over the pin
         uc = -rp * dpsi                                       # contact point's speed over the pin

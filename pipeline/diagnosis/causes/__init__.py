@@ -20,6 +20,7 @@ _MODULES = (
     "torsional_stiffness",
     "backlash",
     "pin_ring_pattern",
+    "pin_ring_tilt",
     "housing_stiffness_pattern",
     "disc_cumulative_pitch",
     "output_reading_lobes",

@@ -70,6 +70,23 @@ def polar(p, cp, tq) -> tuple[float, list, float, list]:
     return (m, [max(lo, 0.0), hi], ang, ci(ang, float(np.degrees(np.sqrt(h @ cp @ h))), tq))
 
 
+def polar_params(prefix: str, bound: float) -> tuple[Param, Param]:
+    """A phasor's two components (<prefix>_cos_um, <prefix>_sin_um), each within +-bound [um]."""
+    return tuple(Param(f"{prefix}_{part}_um", "um", (-bound, bound)) for part in ("cos", "sin"))
+
+
+def polar_report(fit: "Fitted", key: str) -> dict:
+    """<key>_um and <key>_phase_deg of a phasor fit, with their 95 % intervals (polar)."""
+    a, a_ci, ph, ph_ci = polar(fit.p, fit.cov, fit.tq)
+    return {f"{key}_um": a, f"{key}_um_ci95": a_ci, f"{key}_phase_deg": ph, f"{key}_phase_deg_ci95": ph_ci}
+
+
+def polar_draw(rng, amplitude_range: tuple[float, float], key: str) -> tuple[tuple[float, float], dict]:
+    """A virtual-bench phasor: amplitude uniform in the range, any phase; (p, truth in report units)."""
+    a, ph = rng.uniform(*amplitude_range), rng.uniform(-180.0, 180.0)
+    return ((a * np.cos(np.radians(ph)), a * np.sin(np.radians(ph))), {f"{key}_um": a, f"{key}_phase_deg": ph})
+
+
 @dataclass(frozen=True)
 class Evidence:
     """What a finding's sentence may quote: the selection (fit.Selection), the records, their

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.diagnosis.causes.base import Cause, Evidence, Fitted, Param, polar
+from pipeline.diagnosis.causes.base import Cause, Evidence, Fitted, polar_draw, polar_params, polar_report
 
 BOUND_UM = 20.0
 
@@ -33,8 +33,7 @@ class DiscCumulativePitch(Cause):
     dc_even = True   # the mean shift (lost motion) is the same for the pattern turned: even in its size
 
     def params(self, case):
-        return (Param("disc_pitch_cos_um", "um", (-BOUND_UM, BOUND_UM)),
-                Param("disc_pitch_sin_um", "um", (-BOUND_UM, BOUND_UM)))
+        return polar_params("disc_pitch", BOUND_UM)
 
     def apply(self, case, stiffness, p):
         a, ph = float(np.hypot(p[0], p[1])), float(np.degrees(np.arctan2(p[1], p[0])))
@@ -45,10 +44,8 @@ class DiscCumulativePitch(Cause):
         return (case.cycloid.zp,)
 
     def report(self, fit: Fitted) -> dict:
-        a, a_ci, ph, ph_ci = polar(fit.p, fit.cov, fit.tq)
-        return {"disc_cumulative_pitch_um": a, "disc_cumulative_pitch_um_ci95": a_ci,
-                "disc_cumulative_pitch_Fp_um": 2.0 * a,
-                "disc_cumulative_pitch_phase_deg": ph, "disc_cumulative_pitch_phase_deg_ci95": ph_ci}
+        out = polar_report(fit, "disc_cumulative_pitch")
+        return {**out, "disc_cumulative_pitch_Fp_um": 2.0 * out["disc_cumulative_pitch_um"]}
 
     def evidence(self, ev: Evidence) -> str:
         zp = ev.case.cycloid.zp
@@ -60,9 +57,7 @@ class DiscCumulativePitch(Cause):
                 f"pitch measurement of the discs can{ev.alternatives}.")
 
     def draw(self, rng, case):
-        a, ph = rng.uniform(5.0, 12.0), rng.uniform(-180.0, 180.0)
-        return ((a * np.cos(np.radians(ph)), a * np.sin(np.radians(ph))),
-                {"disc_cumulative_pitch_um": a, "disc_cumulative_pitch_phase_deg": ph})
+        return polar_draw(rng, (5.0, 12.0), "disc_cumulative_pitch")
 
 
 CAUSE = DiscCumulativePitch()

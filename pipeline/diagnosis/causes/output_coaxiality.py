@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.diagnosis.causes.base import Cause, Evidence, Fitted, Param, polar
+from pipeline.diagnosis.causes.base import Cause, Evidence, Fitted, polar_draw, polar_params, polar_report
 
 BOUND_UM = 100.0
 
@@ -24,8 +24,7 @@ class OutputCoaxiality(Cause):
     additive = True   # a reading of the output encoder: adds to the mechanism's TE whatever it is
 
     def params(self, case):
-        return (Param("coaxiality_cos_um", "um", (-BOUND_UM, BOUND_UM)),
-                Param("coaxiality_sin_um", "um", (-BOUND_UM, BOUND_UM)))
+        return polar_params("coaxiality", BOUND_UM)
 
     def apply(self, case, stiffness, p):
         e0, ph0 = case.errors.output_coaxiality_um, np.radians(case.errors.output_coaxiality_phase_deg)
@@ -37,9 +36,7 @@ class OutputCoaxiality(Cause):
         return (1,)
 
     def report(self, fit: Fitted) -> dict:
-        e, e_ci, ph, ph_ci = polar(fit.p, fit.cov, fit.tq)
-        return {"output_coaxiality_um": e, "output_coaxiality_um_ci95": e_ci,
-                "output_coaxiality_phase_deg": ph, "output_coaxiality_phase_deg_ci95": ph_ci}
+        return polar_report(fit, "output_coaxiality")
 
     def evidence(self, ev: Evidence) -> str:
         return (f"{ev.prefix}a once-per-output-revolution residual line ({ev.line_by_torque(1.0)}) "
@@ -48,9 +45,7 @@ class OutputCoaxiality(Cause):
                 f"{ev.alternatives}.")
 
     def draw(self, rng, case):
-        e, ph = rng.uniform(5.0, 25.0), rng.uniform(-180.0, 180.0)
-        return ((e * np.cos(np.radians(ph)), e * np.sin(np.radians(ph))),
-                {"output_coaxiality_um": e, "output_coaxiality_phase_deg": ph})
+        return polar_draw(rng, (5.0, 25.0), "output_coaxiality")
 
 
 CAUSE = OutputCoaxiality()
