@@ -190,11 +190,12 @@ LOST_MOTION_LIMIT_ARCMIN = 1.0      # catalog: lost motion <= 1 arcmin at +-3 % 
 
 
 def band_names(case) -> tuple[str, ...]:
-    """The [tolerances] bands that apply to the case (disc phase needs two discs)."""
+    """The [tolerances] bands that apply to the case (disc phase and pin-ring tilt need two discs)."""
     import dataclasses
     from geometry.params import Tolerances
     names = tuple(f.name for f in dataclasses.fields(Tolerances))
-    return names if case.cycloid.disc_count > 1 else tuple(n for n in names if n != "disc_phase_um")
+    return names if case.cycloid.disc_count > 1 else tuple(n for n in names
+                                                            if n not in ("disc_phase_um", "pin_ring_tilt_um"))
 
 
 def line_orders(case, n_points: int) -> tuple[int, ...]:
@@ -271,6 +272,10 @@ def draw_build(case, distribution: str, seed: int, i: int) -> dict[str, dict]:
     coax = rng.uniform(0, 1, 2)
     out["output_coaxiality_um"] = {"output_coaxiality_um": coax[0] * tl.output_coaxiality_um,
                                    "output_coaxiality_phase_deg": coax[1] * 360.0}
+    if nd > 1:   # drawn last: the bands before it keep the numbers they had without it
+        tilt = rng.uniform(0, 1, 2)
+        out["pin_ring_tilt_um"] = {"pin_ring_tilt_um": tilt[0] * tl.pin_ring_tilt_um,
+                                   "pin_ring_tilt_phase_deg": tilt[1] * 360.0}
     return out
 
 

@@ -256,3 +256,8 @@ def test_the_si_view_is_the_case_s_sizes_converted_once():
     assert si.sun_pitch_radius_m == s1.module_mm * s1.z1 / 2 * 1e-3
     assert si.youngs_modulus_Pa == case.material.youngs_modulus_GPa * 1e9
     assert case.replace("cycloid", eccentricity_mm=1.2).si.eccentricity_m == 1.2e-3   # a copy gets its own
+
+
+def test_a_tolerance_band_stays_half_the_error_range_so_the_difference_of_two_draws_is_an_error():
+    from geometry.params import ERROR_UM_MAX, TOLERANCE_UM_MAX
+    assert TOLERANCE_UM_MAX == ERROR_UM_MAX / 2

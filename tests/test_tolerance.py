@@ -236,3 +236,17 @@ def test_a_bad_tolerance_band_names_the_key_and_the_range(tmp_path):
     case = _bands(load_case(CASE), eccentricity_um=40.0)   # eccentric phase 2 x 40 um / 1.3 mm = 212 arcmin
     with pytest.raises(CaseError, match=r"\[tolerances\] eccentricity_um = 40"):
         tol.check_tolerances(case)
+
+
+def test_the_pin_ring_tilt_band_is_drawn_last_so_the_other_bands_keep_their_numbers():
+    import dataclasses
+    from support import case_path
+    case = load_case(case_path("rv160n-81"))
+    build = tol.draw_build(case, "uniform", 7, 3)
+    assert list(build)[-1] == "pin_ring_tilt_um"
+    assert 0.0 <= build["pin_ring_tilt_um"]["pin_ring_tilt_um"] <= case.tolerances.pin_ring_tilt_um
+    narrow = dataclasses.replace(case, tolerances=dataclasses.replace(case.tolerances, pin_ring_tilt_um=0.0))
+    other = tol.draw_build(narrow, "uniform", 7, 3)
+    assert other["pin_ring_tilt_um"]["pin_ring_tilt_um"] == 0.0
+    assert {k: v for k, v in other.items() if k != "pin_ring_tilt_um"} == \
+        {k: v for k, v in build.items() if k != "pin_ring_tilt_um"}

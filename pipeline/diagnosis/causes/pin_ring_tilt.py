@@ -12,9 +12,10 @@ frame zc times per output revolution, so the line is at zc x with amplitude t / 
 Disc 2's eccentric is turned 180 deg and its shift is -t: its t_perp is disc 1's, the two lines ADD.
 A ring shifted alike at both planes (pin_ring_pattern's m = 1, 0.2-0.3 arcsec/um) makes the discs
 pull opposite ways and cancels. Model, RV-160N FE stiffness: 2.55-2.57 arcsec/um at 39x from 0 to
-1800 N.m, the same in both directions (closed form 2.64; the rest is the radial part of the shift and
-the crank supports' compliance), mean shift < 0.04 arcsec: a 39x line independent of torque and
-direction.
+1800 N.m, the same size in both directions, its phase 17 deg apart between them (the radial part of the
+shift acts on the loaded flank; on the RV-40E stand-in 'same'); closed form 2.64, the rest is that
+radial part and the crank supports' compliance; mean shift < 0.04 arcsec: a 39x line independent of
+torque. The atlas groups it with pin_radial_lobes_m1 (the same shape, a tenth of the size).
 Bounds: +-10 um per component, ASSUMED: the pin ring and the main-bearing seats bored in one
 setting hold their coaxiality within IT5 (20 um at 180-250 mm) over the housing, half of it at each
 disc plane; more is a housing clamped askew or a damaged seat. Unit size 1 um.
@@ -33,7 +34,7 @@ BOUND_UM = 10.0
 class PinRingTilt(Cause):
     id = "pin_ring_tilt"
     description = "pin ring axis tilted against the carrier's: its centre off oppositely at the two disc planes"
-    signature = "zc x line (the discs' lines add), independent of torque and direction"
+    signature = "zc x line (the discs' lines add), independent of torque, one size in both directions"
     unit_size = 1.0
 
     def params(self, case):
