@@ -231,3 +231,25 @@ def test_simulate_condition_is_the_operating_point_at_the_record_s_angles(model)
     assert np.allclose(run.te_arcsec, op.backward.te_arcsec, atol=1e-9)
     with pytest.raises(Exception, match="direction"):
         simulate_condition(model, LUB, [0.0], 150.0, 0, 900.0, 30.0)
+
+
+def test_the_running_losses_shift_the_mean_te_flat_in_angle_opposite_by_direction_growing_with_torque(model):
+    """friction_shift_arcsec: what the losses add to the frictionless statics is one constant per
+    condition and direction (the seam a record's TE model can add), not a line: its spread over six
+    angles stays below 0.02 arcsec where the shift itself is ~1 arcsec; forward and backward mirror
+    each other (the load resists both), and it is there at no load too (the carrier's drag)."""
+    from dynamics.losses.operating import friction_shift_arcsec, shift_by_torque
+    lub = Lubricant.from_section(model.case.lubrication)
+    rated, speed = model.case.rated_torque_Nm, model.case.operation.input_speed_rpm
+    means = [friction_shift_arcsec(model, lub, 0.3 * rated, 1, speed, 25.0, points=k) for k in (1, 2, 3, 6)]
+    assert np.ptp(means) < 0.02 and means[0] < -0.1
+    fw = [friction_shift_arcsec(model, lub, f * rated, 1, speed, 25.0) for f in (0.0, 0.3, 1.0)]
+    bw = [friction_shift_arcsec(model, lub, f * rated, -1, speed, 25.0) for f in (0.0, 0.3, 1.0)]
+    assert np.allclose(fw, -np.asarray(bw), rtol=0.02, atol=0.005)
+    # forward the output lags more with the losses, at every torque: at no load by the carrier's drag on
+    # the soft free-play end of the curve, under load by the contact friction on its stiffer part
+    assert max(fw) < -0.1
+    # shift_by_torque: one value for a steady torque, interpolated between three levels otherwise
+    calls = []
+    assert shift_by_torque([100.0, 100.2], lambda t: calls.append(t) or 2.0 * t) == pytest.approx(200.2)
+    assert np.allclose(shift_by_torque(np.array([0.0, 50.0, 100.0]), lambda t: 3.0 * t), [0.0, 150.0, 300.0])
