@@ -26,9 +26,9 @@ more than a margin (dynamics.kernels.CANDIDATE_MARGIN_M); w.gap / w.force hold g
 As-built errors (case.errors, geometry.params.Errors), all through this same gap and law:
   pins   uniform radius / circle radius, per-pin radial, tangential and radius, pin-ring radial
          lobes: the pin centres and radii of `pins`; a tilted pin ring: the centres shifted per
-         disc plane (`plane_shift`, constant: no change of the gradients); pin support (groove) stiffness lobes: a
-         multiplier on each pin's law (column 4 of `pins`; the whole series law is scaled, ASSUMED:
-         the refitted law does not separate the groove's share);
+         disc plane (`plane_shift`, constant: no change of the gradients); pin support (groove)
+         stiffness lobes: a multiplier on each pin's law (column 4 of `pins`; the whole series law
+         is scaled, ASSUMED: the refitted law does not separate the groove's share);
   seats  pin seats softer than the housing FE (dynamics.couplings.housing.SeatCompliance, a
          stiffness part the diagnosis sets): compliance sk in series with the law along the normal,
          approach = dc + sk F(dc), solved per contact (`_series_approach`), V = law energy + sk F^2 / 2;
