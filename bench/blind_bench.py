@@ -18,6 +18,9 @@ Sets (amplitudes and phases drawn from --seed; theta the output angle, T_top the
                 beyond the coaxiality's stated range) -> output_coaxiality, at its bound
   pinring2      a cos(2 zc theta + phi), a in [2, 6] arcsec, the same at every torque
                 -> pin_ring_pattern
+  tilt39        a cos(zc theta + phi), a in [2, 6] arcsec, the same at every torque and in both
+                directions: a pin ring tilted against the carrier (the discs' zc x lines add)
+                -> pin_ring_tilt
   compliance4   the record's own wind-up (its mean TE less the no-load run's, same direction)
                 times 3: a reducer four times softer than the model -> torsional_stiffness
   clean         nothing -> no cause
@@ -46,10 +49,11 @@ ARCSEC_PER_DEG = 3600.0
 LOAD_SETTLED_S = 2.2          # paper 001's speed ramp ends at 1 s, the load ramp at 2 s
 NOISE_ARCSEC = 0.3
 ENCODER_BITS = 23
-SETS = ("housing156", "crank40", "coaxiality", "encoder500", "pinring2", "compliance4", "clean")
+SETS = ("housing156", "crank40", "coaxiality", "encoder500", "pinring2", "compliance4", "clean", "tilt39")
 EXPECTED = {"housing156": "housing_stiffness_pattern", "crank40": "crank_eccentricity_error",
             "coaxiality": "output_coaxiality", "encoder500": "output_coaxiality",
-            "pinring2": "pin_ring_pattern", "compliance4": "torsional_stiffness", "clean": None}
+            "pinring2": "pin_ring_pattern", "compliance4": "torsional_stiffness", "clean": None,
+            "tilt39": "pin_ring_tilt"}
 MIN_GAIN = 0.6
 
 
@@ -142,6 +146,10 @@ def hidden(name: str, rng, nums, runs) -> tuple[dict, dict]:
         a = rng.uniform(2.0, 6.0)
         truth.update(order=2 * zc, arcsec=a)
         f = lambda T, d, th: a * np.cos(2 * zc * th + phi)  # noqa: E731
+    elif name == "tilt39":
+        a = rng.uniform(2.0, 6.0)
+        truth.update(order=zc, arcsec=a)
+        f = lambda T, d, th: a * np.cos(zc * th + phi)  # noqa: E731
     elif name == "compliance4":
         mean0 = {d: te_of(runs[(min(T for T, _ in runs), d)], nums["ratio"]).mean() for d in (1, -1)}
         wind = {(T, d): te_of(c, nums["ratio"]).mean() - mean0[d] for (T, d), c in runs.items()}
