@@ -81,6 +81,13 @@ def polar_report(fit: "Fitted", key: str) -> dict:
     return {f"{key}_um": a, f"{key}_um_ci95": a_ci, f"{key}_phase_deg": ph, f"{key}_phase_deg_ci95": ph_ci}
 
 
+def with_phasor_added(case, key: str, p):
+    """The case with (p0, p1) added as a phasor to the error pair <key>_um at <key>_phase_deg."""
+    er = case.errors
+    v = getattr(er, f"{key}_um") * np.exp(1j * np.radians(getattr(er, f"{key}_phase_deg"))) + complex(p[0], p[1])
+    return case.with_errors(**{f"{key}_um": float(abs(v)), f"{key}_phase_deg": float(np.degrees(np.angle(v)))})
+
+
 def polar_draw(rng, amplitude_range: tuple[float, float], key: str) -> tuple[tuple[float, float], dict]:
     """A virtual-bench phasor: amplitude uniform in the range, any phase; (p, truth in report units)."""
     a, ph = rng.uniform(*amplitude_range), rng.uniform(-180.0, 180.0)

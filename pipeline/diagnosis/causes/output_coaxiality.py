@@ -9,9 +9,8 @@ Virtual bench: e in [5, 25] um, phi in [-180, 180) deg.
 """
 from __future__ import annotations
 
-import numpy as np
-
-from pipeline.diagnosis.causes.base import Cause, Evidence, Fitted, polar_draw, polar_params, polar_report
+from pipeline.diagnosis.causes.base import (Cause, Evidence, Fitted, polar_draw, polar_params, polar_report,
+                                             with_phasor_added)
 
 BOUND_UM = 100.0
 
@@ -27,10 +26,7 @@ class OutputCoaxiality(Cause):
         return polar_params("coaxiality", BOUND_UM)
 
     def apply(self, case, stiffness, p):
-        e0, ph0 = case.errors.output_coaxiality_um, np.radians(case.errors.output_coaxiality_phase_deg)
-        v = e0 * np.exp(1j * ph0) + complex(p[0], p[1])
-        return case.with_errors(output_coaxiality_um=float(abs(v)),
-                                output_coaxiality_phase_deg=float(np.degrees(np.angle(v)))), stiffness
+        return with_phasor_added(case, "output_coaxiality", p), stiffness
 
     def orders(self, case):
         return (1,)

@@ -23,10 +23,9 @@ Virtual bench: t in [0.8, 3] um (2-8 arcsec on the RV-40E stand-in), any phase.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from dynamics.results import ARCSEC_PER_RAD
-from pipeline.diagnosis.causes.base import Cause, Evidence, Fitted, polar_draw, polar_params, polar_report
+from pipeline.diagnosis.causes.base import (Cause, Evidence, Fitted, polar_draw, polar_params, polar_report,
+                                             with_phasor_added)
 
 BOUND_UM = 10.0
 
@@ -41,10 +40,7 @@ class PinRingTilt(Cause):
         return polar_params("pin_ring_tilt", BOUND_UM)
 
     def apply(self, case, stiffness, p):
-        er = case.errors
-        v = er.pin_ring_tilt_um * np.exp(1j * np.radians(er.pin_ring_tilt_phase_deg)) + complex(p[0], p[1])
-        return case.with_errors(pin_ring_tilt_um=float(abs(v)),
-                                pin_ring_tilt_phase_deg=float(np.degrees(np.angle(v)))), stiffness
+        return with_phasor_added(case, "pin_ring_tilt", p), stiffness
 
     def orders(self, case):
         return (case.cycloid.zc,)
