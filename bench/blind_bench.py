@@ -7,8 +7,9 @@ cached in OUT/clean/), hides ONE effect per set in the output encoder signal, ad
 `python -m pipeline diagnose` on each set and checks the named cause and the gain.
 
 Sets (amplitudes and phases drawn from --seed; theta the output angle, T_top the top torque):
-  housing156    a |T| / T_top cos(4 zc theta + phi), a in [4, 8] arcsec: a housing stiffness
-                pattern of 4 lobes (grows linearly with torque, none at no load)
+  housing156    a T / T_top cos(4 zc theta + phi), a in [4, 8] arcsec, T signed (backward runs
+                negative): a housing stiffness pattern of 4 lobes (grows linearly with torque, none
+                at no load, reverses with the direction of motion as any compliance times the load)
                 -> housing_stiffness_pattern
   crank40       a cos(zp theta + phi), a in [8, 25] arcsec, any phase, the same at every torque
                 -> crank_eccentricity_error
@@ -127,7 +128,9 @@ def hidden(name: str, rng, nums, runs) -> tuple[dict, dict]:
     if name == "housing156":
         a = rng.uniform(4.0, 8.0)
         truth.update(order=4 * zc, arcsec_at_top=a)
-        f = lambda T, d, th: a * abs(T) / top * np.cos(4 * zc * th + phi)  # noqa: E731
+        # a seat compliance times the load: the line follows the signed torque (it reverses with the
+        # direction of motion, as the real bench's 156x line does), as a wind-up does
+        f = lambda T, d, th: a * d * T / top * np.cos(4 * zc * th + phi)  # noqa: E731
     elif name == "crank40":
         a = rng.uniform(8.0, 25.0)
         truth.update(order=zp, arcsec=a)

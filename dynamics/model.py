@@ -178,12 +178,18 @@ def simulate(model: ReducerModel, load: LoadSpec, *, duration_s: float = 7.0,
              input_speed_rpm: float | None = None, direction: int = +1, dt_s: float | None = None,
              sample_dt_s: float | None = None, ramp: bool = True, store_pin_forces: bool = True,
              hht_alpha: float = HHT_ALPHA, damping_beta_s_: float | None = None,
-             return_energy: bool = False) -> TEResult:
+             return_energy: bool = False, carrier_drag_Nm: float = 0.0) -> TEResult:
     """Time integration of paper 001's run: input speed ramp (STEP over 1 s), load form `load`.
     Starts at rest in static equilibrium under the load's initial torque. input_speed_rpm
     defaults to DESIGN.md's 1200 rpm; direction -1 runs backward (record torque negative).
+    carrier_drag_Nm (>= 0, dynamics.losses.contacts.carrier_drag_Nm): the main bearings' and
+    output seal's drag, resisting the carrier's motion on top of the load (paper 001's model has
+    none: 0); the record's torque column stays the load's, as a torque meter beyond the output reads.
     Energy bookkeeping (kinetic, potential, input work, load work) lands in meta when asked."""
     check_direction(direction)
+    if not (math.isfinite(carrier_drag_Nm) and 0.0 <= carrier_drag_Nm <= model.case.rated_torque_Nm):
+        raise DynamicsError(f"simulate: carrier_drag_Nm = {carrier_drag_Nm!r}: allowed a finite drag in "
+                            f"[0, rated {model.case.rated_torque_Nm:g}] N m")
     check_load_range(model, load)
     speed = DEFAULT_SPEED_RPM if input_speed_rpm is None else float(input_speed_rpm)
     dt = DEFAULT_DT_S if dt_s is None else float(dt_s)
@@ -200,9 +206,10 @@ def simulate(model: ReducerModel, load: LoadSpec, *, duration_s: float = 7.0,
     th = direction * np.deg2rad(input_angle_deg(t, speed, ramp))
     w = direction * np.deg2rad(input_speed_deg_s(t, speed, ramp))
     T = direction * np.asarray(load_torque_Nm(load, t), dtype=float)
+    T_mech = T + direction * carrier_drag_Nm if carrier_drag_Nm else T     # what the mechanism carries
     beta = damping_beta_s(model) if damping_beta_s_ is None else float(damping_beta_s_)
-    q, _ = static_q(model, th[0], T[0], None, direction)
-    run = run_dynamics(model, q, np.zeros_like(q), th, w, T, dt, stride, hht_alpha, beta,
+    q, _ = static_q(model, th[0], T_mech[0], None, direction)
+    run = run_dynamics(model, q, np.zeros_like(q), th, w, T_mech, dt, stride, hht_alpha, beta,
                        store_forces=store_pin_forces)
     pin_peak = float(model.contacts(run.peak_force_N).max(initial=0.0))
     table = float(np.max(model.stiffness.pin_contact.load_N))
@@ -225,7 +232,7 @@ def simulate(model: ReducerModel, load: LoadSpec, *, duration_s: float = 7.0,
             "newton_per_step": run.newton_iterations / max(nsteps, 1), "missed_contacts": run.missed,
             "peak_pin_force_N": pin_peak, "pin_table_max_N": table,
             "input_speed_rpm": speed, "direction": direction, "solver": f"HHT-alpha {hht_alpha}",
-            "damping_beta_s": beta, "input_torque_Nm": s.tau_in,
+            "damping_beta_s": beta, "input_torque_Nm": s.tau_in, "carrier_drag_Nm": float(carrier_drag_Nm),
             "kernel_calls": run.chunks, "max_kernel_call_s": run.max_chunk_wall_s}
     if return_energy:
         meta["energy_J"] = s.energy

@@ -54,5 +54,8 @@ class Lubrication:
     # RV-160N-sized by default (the main bearings' size is the case's [main_bearings] section)
     output_seal_diameter_mm: float = _r(0.0, 2000.0, 260.0, open_lo=False)
     input_seal_diameter_mm: float = _r(0.0, 500.0, 30.0, open_lo=False)
+    # the oil temperature of a run that states none (`simulate`'s records, a record without an
+    # `# oil_temperature_C` comment): ASSUMED the real bench's 25 C operating map
+    run_oil_temperature_C: float = _r(-60.0, 250.0, 25.0)
     # ISO 281 contamination factor: 0.5-0.6 "normal cleanliness" (ISO 281:2007 table 13)
     contamination_factor: float = _r(0.0, 1.0, 0.55)

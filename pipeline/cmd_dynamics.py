@@ -54,18 +54,28 @@ def cmd_simulate(args) -> int:
     model, spath = _model(args)
     # DESIGN.md: the input speed defaults to the case's [operation] input_speed_rpm
     speed = model.case.operation.input_speed_rpm if args.speed_rpm is None else args.speed_rpm
+    # a bench run: the carrier's own drag (main bearings, output seal) at the run's speed and the
+    # lubricant's stated oil temperature rides on the load (what keeps an unloaded reducer on a flank)
+    from dynamics.losses.contacts import carrier_drag_Nm
+    from dynamics.losses.lubricant import Lubricant
+    oil_C = model.case.lubrication.run_oil_temperature_C
+    drag = carrier_drag_Nm(model.case, Lubricant.from_section(model.case.lubrication), speed, oil_C)
     t0 = time.perf_counter()
     res = simulate(model, load, duration_s=args.duration, input_speed_rpm=speed,
-                   direction=-1 if args.backward else 1, dt_s=args.dt, store_pin_forces=False)
+                   direction=-1 if args.backward else 1, dt_s=args.dt, store_pin_forces=False,
+                   carrier_drag_Nm=drag)
     wall = time.perf_counter() - t0
     made = _made_from(model, "rv-record/1")
     write_te_result(args.out, res, comments=[
         f"simulated by rvte dynamics: case {model.case.name}, load {load}, "
         f"speed {res.meta['input_speed_rpm']:g} rpm, {'backward' if args.backward else 'forward'}",
         f"stiffness {spath}; dt {res.meta['dt_s']:g} s; {res.meta['solver']}",
+        f"carrier drag {drag:.4g} N m on the load (main bearings and output seal, [lubrication], oil {oil_C:g} C); "
+        "the torque column is the load",
         f"made_from: case {made.case_fingerprint}, stiffness {dict(made.inputs)['stiffness']}",
         "encoder_zero: simulation (TE = 0 at the unloaded kinematic zero)",
-        f"input_speed_rpm: {res.meta['input_speed_rpm']:g}"])   # the condition, checked by diagnose
+        f"input_speed_rpm: {res.meta['input_speed_rpm']:g}",    # the condition, read by diagnose
+        f"oil_temperature_C: {oil_C:g}"])
     _say(args, f"simulate: {args.out}: {res.t_s[-1]:.3g} s simulated in {wall:.1f} s, " + _sigma_text(res))
     return 0
 

@@ -182,3 +182,30 @@ def test_seeds_follow_the_last_model_solved_on_a_grid_and_only_inside_a_run():
         sim._seeded(key_b, (np.zeros(3), qb))
         assert sim._seeds_for(key_a) is qb
     assert sim._seeds_for(key_a) is None
+
+
+def test_a_record_s_condition_puts_the_carrier_drag_on_the_mechanism_not_on_the_reading():
+    """quasi_static_te at a record's condition solves the statics under load + the carrier's drag at
+    that speed and oil temperature (resisting the motion: + forward, - backward, in the record's
+    sign convention of solve_static); without a
+    condition it is the frictionless model at the load alone. A temperature outside the
+    lubricant's range is the one-line error."""
+    from dynamics.losses import Lubricant
+    from dynamics.losses.contacts import carrier_drag_Nm
+    from dynamics.statics import solve_static
+    from tests.support import stiffness_for_tests
+    stiff = stiffness_for_tests(CASE)
+    model = sim.model_for(CASE, stiff)
+    ang = np.array([10.0, 200.0])
+    cond = sim.Condition(1500.0, 40.0)
+    drag = carrier_drag_Nm(CASE, Lubricant.from_section(CASE.lubrication), 1500.0, 40.0)
+    assert sim.carrier_drag(CASE, cond) == pytest.approx(drag) and drag > 0.5
+    assert sim.carrier_drag(CASE, None) == 0.0
+    for d, T in ((1, 100.0), (-1, -100.0), (1, 0.0)):
+        te = sim.quasi_static_te(CASE, stiff, d * ang, T, d, cond)
+        want = [solve_static(model, a, T + d * drag, None, d).te_arcsec for a in d * ang]
+        assert np.allclose(te, want, atol=1e-6)
+        bare = sim.quasi_static_te(CASE, stiff, d * ang, T, d)
+        assert np.allclose(bare, [solve_static(model, a, T, None, d).te_arcsec for a in d * ang], atol=1e-6)
+    with pytest.raises(Exception, match="oil temperature"):
+        sim.quasi_static_te(CASE, stiff, ang, 100.0, 1, sim.Condition(1500.0, 500.0))

@@ -30,6 +30,9 @@ def test_simulate_writes_a_bench_record(tmp_path, stiffness_file):
     data = np.loadtxt(rows[1:], delimiter=",")
     assert data[-1, 0] == pytest.approx(0.3)
     assert np.allclose(data[:, 3], 0.05 * 200 * np.sin(8 * data[:, 0]) + 200, atol=1e-6)
+    # the run's condition for diagnose, and the carrier's drag it carried beside the load (not in the column)
+    notes = [r for r in out.read_text().splitlines() if r.startswith("#")]
+    assert "# oil_temperature_C: 25" in notes and any(n.startswith("# carrier drag ") for n in notes)
 
 
 def test_missing_stiffness_is_a_one_line_error_naming_the_fem_stage(tmp_path, capsys):

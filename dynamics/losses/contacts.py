@@ -221,12 +221,31 @@ def contact_friction(model: ReducerModel, lub: Lubricant, q: np.ndarray, input_r
     # --- main bearings and seals (no-load): the carrier's drag, kept apart (the caller adds it to
     # the load torque, so the robust static solver closes the free play with it)
     om_out = dq[io]
-    n_out = abs(om_out) * RPM_PER_RAD_S
-    M_main = 2 * viscous * brg.palmgren_no_load_Nm(sec.f0_main, nu_cSt, n_out, case.main_bearings.pitch_diameter_mm)
-    M_seal_out = brg.seal_moment_Nm(sec.output_seal_diameter_mm)
+    M_main, M_seal_out = _carrier_drag_parts(case, lub, abs(om_out) * RPM_PER_RAD_S, nu_cSt, viscous)
     power["main_bearings"] = M_main * abs(om_out)
     power["seals"] = M_seal_out * abs(om_out) + brg.seal_moment_Nm(sec.input_seal_diameter_mm) * abs(om_in)
     return ContactFriction(force=f, carrier_drag_Nm=M_main + M_seal_out, pin_mu=np.asarray(pin_mu), pin_film_parameter=np.asarray(pin_lam),
                            pin_film_m=np.asarray(pin_h), power_W=power,
                            mesh_mu=float(np.mean(reg.friction)) if len(Fm) else 0.0,
                            mesh_film_parameter=float(np.mean(reg.film_parameter)) if len(Fm) else 0.0)
+
+
+def _carrier_drag_parts(case, lub: Lubricant, output_speed_rpm: float, nu_cSt: float,
+                        viscous: bool = True) -> tuple[float, float]:
+    """(main-bearing pair's Palmgren M0, output seal's moment) [N m] at the carrier's speed."""
+    sec = lub.section
+    M_main = 2 * viscous * brg.palmgren_no_load_Nm(sec.f0_main, nu_cSt, output_speed_rpm,
+                                                   case.main_bearings.pitch_diameter_mm)
+    return M_main, brg.seal_moment_Nm(sec.output_seal_diameter_mm)
+
+
+def carrier_drag_Nm(case, lub: Lubricant, input_speed_rpm: float, oil_temperature_C: float) -> float:
+    """The torque [N m, >= 0] that resists the carrier's motion whatever the load: the main bearings'
+    no-load moment and the output seal, at the input speed's output speed and the oil temperature
+    (the carrier_drag_Nm of contact_friction, without a state: it depends on neither). A running
+    reducer's mechanism carries load + drag; a bench's torque meter beyond the output reads the load.
+    At rest (speed 0) the bearings' viscous part vanishes and the seal's remains."""
+    lub.check_temperature(oil_temperature_C)
+    n_out = abs(float(input_speed_rpm)) / case.ratio
+    return float(sum(_carrier_drag_parts(case, lub, n_out, float(lub.kinematic_cSt(oil_temperature_C)),
+                                         input_speed_rpm != 0)))

@@ -2,7 +2,8 @@
 
 A seeded generator draws the cause, its size and phase (`draw_effect`); `bench_records` runs the
 model with the effect (quasi-static, the same path the diagnosis uses) under forward/backward
-pairs at a few torques, adds a random encoder zero per pair, Gaussian angle noise and encoder
+pairs at a few torques (at the records' condition: the carrier's drag rides on the load as in the
+diagnosis), adds a random encoder zero per pair, Gaussian angle noise and encoder
 quantisation (both encoders, `encoder_bits` counts per turn), and returns BenchRecords exactly as
 the loader would (write them with `write_records` to test the CLI). Truth is kept beside the
 records in `HiddenEffect.truth`, in the units diagnosis.json reports.
@@ -19,6 +20,7 @@ import numpy as np
 from dynamics.records import BenchRecord, write_record
 from dynamics.results import ARCSEC_PER_DEG
 from pipeline.diagnosis import causes
+from pipeline.diagnosis.simulate import Condition, call_te_model
 
 
 def drawable_causes() -> tuple[str, ...]:
@@ -65,7 +67,9 @@ def bench_records(te_model, case, stiffness, effects, *, seed: int,
             # each run covers one output revolution from the encoders' common home
             th_in = (0.0 if d > 0 else 360.0 * case.ratio) + d * np.linspace(0.0, 360.0 * case.ratio,
                                                                               samples_per_rev + 1)
-            te = te_model(hidden_case, hidden_stiff, th_in, d * T, d)
+            # at the condition the diagnosis will read off the record (its speed; no oil temperature
+            # comment: the lubricant's stated run temperature), so the carrier's drag is the same
+            te = call_te_model(te_model, hidden_case, hidden_stiff, th_in, d * T, d, Condition(round(float(speed), 1)))
             te = te + zero + rng.normal(0.0, noise_arcsec, te.shape)
             a_in = np.round(th_in / q) * q
             a_out = np.round((th_in / case.ratio + te / ARCSEC_PER_DEG) / q) * q

@@ -15,8 +15,9 @@ cycloid-pin mesh ripple (zp zc x, the model's strongest line above MAX_ORDER: 0.
 RV-160N) folds onto the mean instead of onto a line. A torque that varies more is followed sample
 by sample on a thinned set of samples (cost grows with the revolutions, linear interpolation).
 Quasi-static means no inertia or damping: valid for the slow, steady runs of a TE bench, not for
-load transients. Zero torque (the bench's "0 N.m" runs) is passed as 0: the model rests on the
-flank of the direction of motion under a vanishing preload (dynamics.model.solve_static).
+load transients. Zero torque (the bench's "0 N.m" runs) is passed as 0: at the record's condition
+the carrier's drag holds the model on the flank of the direction of motion (below); without a
+condition it rests there under a vanishing preload (dynamics.model.solve_static).
 
 Caches (content-keyed, never by object id: an id is reused after garbage collection):
   models    per (case, stiffness content digest `stiffness_digest`);
@@ -33,8 +34,11 @@ Caches (content-keyed, never by object id: an id is reused after garbage collect
             each other, the unperturbed model falls behind as the fit moves) the 8 real records'
             diagnosis takes 145 s instead of 179 s.
 `TEModel` is the seam to the dynamics stage: any callable with its signature can stand in. It
-receives the record's `Condition` (speed, oil temperature): the quasi-static frictionless model
-does not depend on it yet (the losses model of issue 21 will, through this argument).
+receives the record's `Condition` (speed, oil temperature): given one, the mechanism carries the
+record's load plus the carrier's drag at that condition (main bearings and output seal,
+dynamics.losses.contacts.carrier_drag_Nm; a bench's torque meter reads the load alone), which also
+holds an unloaded record's discs on the flank of the motion as on a running reducer. The contacts'
+friction is not in this path (dynamics.losses.operating.friction_shift_arcsec: a constant per record).
 """
 from __future__ import annotations
 
@@ -74,6 +78,31 @@ class Condition:
 def record_condition(record: BenchRecord) -> Condition:
     """The condition a record was run at, read from the record (speed to 0.1 rpm: a cache key)."""
     return Condition(round(float(record.input_speed_rpm), 1), record.comment_value("oil_temperature_C"))
+
+
+_DRAGS: dict = {}
+
+
+def carrier_drag(case, condition: Condition | None) -> float:
+    """The carrier's drag [N m] at a record's condition (0 without one); oil temperature from the
+    condition or the lubricant's stated run temperature; outside its range: the one-line error."""
+    if condition is None:
+        return 0.0
+
+    def make():
+        from dynamics.losses.contacts import carrier_drag_Nm
+        from dynamics.losses.lubricant import Lubricant
+        temp = condition.oil_temperature_C
+        temp = case.lubrication.run_oil_temperature_C if temp is None else float(temp)
+        return carrier_drag_Nm(case, Lubricant.from_section(case.lubrication), condition.input_speed_rpm, temp)
+    return _cached(_DRAGS, (case.lubrication, case.ratio, case.main_bearings, condition), make)
+
+
+def mechanism_torque(case, torque_Nm: np.ndarray, direction: int, condition: Condition | None) -> np.ndarray:
+    """What the mechanism carries in the record convention (+ resists forward): the record's torque
+    plus the carrier's drag, which resists the motion in either direction."""
+    drag = carrier_drag(case, condition)
+    return torque_Nm + direction * drag if drag else torque_Nm
 
 
 def max_order(case) -> int:
@@ -167,10 +196,12 @@ def quasi_static_te(case, stiffness, input_angle_deg: np.ndarray, torque_Nm,
     """TE [arcsec] of the dynamics model's static equilibria (dynamics.model.quasi_static, TE only).
 
     torque_Nm is the record's (signed, + resists forward rotation); quasi_static applies
-    direction * its argument, so it gets direction * torque_Nm (= |T| for a steady record).
+    direction * its argument, so it gets direction * torque_Nm (= |T| for a steady record), plus
+    the carrier's drag at `condition` (module docstring).
     The carrier angles are cached per mechanics (module docstring); the reading is the case's own."""
     ang = np.asarray(input_angle_deg, float)
-    T = np.ascontiguousarray(np.broadcast_to(np.asarray(torque_Nm, float), ang.shape))
+    T = np.ascontiguousarray(np.broadcast_to(mechanism_torque(case, np.asarray(torque_Nm, float), direction,
+                                                              condition), ang.shape))
     key, mech, digest = _carrier_key(case, stiffness, ang, T, direction, condition)
     carrier = _cached(_CARRIERS, key, lambda: _seeded(key, _carrier_deg(model_for(mech, stiffness, digest), ang, T,
                                                                        direction, _seeds_for(key))))
@@ -291,8 +322,9 @@ def _prefetch(case, stiffness, records, n: int, pool) -> None:
             continue
         d = r.direction
         ang = periodic_grid_deg(case, n, d)
-        T = np.full(ang.shape, r.torque_Nm)
-        key, mech, _ = _carrier_key(case, stiffness, ang, T, d, record_condition(r))
+        cond = record_condition(r)
+        T = np.full(ang.shape, mechanism_torque(case, np.float64(r.torque_Nm), d, cond))
+        key, mech, _ = _carrier_key(case, stiffness, ang, T, d, cond)
         if key not in _CARRIERS and key not in jobs:
             jobs[key] = (mech, ang, T, d)
     if len(jobs) < 2:
@@ -373,16 +405,16 @@ def simulate_record(te_model: TEModel, case, stiffness, record: BenchRecord,
         period = 360.0 * case.ratio                      # input degrees per output revolution
         d = record.direction
         grid = periodic_grid_deg(case, n, d)
-        te = np.asarray(_call(te_model, case, stiffness, grid, record.torque_Nm, d, cond), float)
+        te = np.asarray(call_te_model(te_model, case, stiffness, grid, record.torque_Nm, d, cond), float)
         return trig_interp(te[::d] if d > 0 else np.r_[te[0], te[:0:-1]], record.input_angle_deg / period)
     idx = simulation_indices(record, n)
     ang = record.input_angle_deg[idx]
-    te = _call(te_model, case, stiffness, ang, record.output_torque_Nm[idx], record.direction, cond)
+    te = call_te_model(te_model, case, stiffness, ang, record.output_torque_Nm[idx], record.direction, cond)
     order = np.argsort(ang)
     return np.interp(record.input_angle_deg, ang[order], np.asarray(te)[order])
 
 
-def _call(te_model: TEModel, case, stiffness, ang, torque, direction: int, cond: Condition):
+def call_te_model(te_model: TEModel, case, stiffness, ang, torque, direction: int, cond: Condition):
     """te_model with the record's condition when it takes one (a five-argument TEModel is
     condition-blind, as the quasi-static model was before the seam)."""
     try:
