@@ -80,6 +80,7 @@ class Run:
     fmaps: list
     w: np.ndarray
     noise_arcsec: float              # the records' noise floor (effect sizes below it: dropped)
+    prefetch: object = None          # (models [(case, stiffness, tangent)], idx) -> None: solve their grids as a batch
 
 
 def extend(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int):
@@ -215,7 +216,8 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
         x0 = min(starts, key=lambda x: _cost(fun, x))   # start from the best candidate by cost
     bounded = bool(np.any(np.isfinite(lo) | np.isfinite(hi)))
     note = ""
-    jacobian = _jacobian(fun, J, spans, model_at, tag)
+    prefetch = (lambda models: run.prefetch(models, fit_idx)) if run.prefetch is not None else None
+    jacobian = _jacobian(fun, J, spans, model_at, tag, prefetch)
     budget = _Budget(max_nfev, fun)
     try:
         method = "trf" if bounded or len(rows) <= len(x0) else "lm"
@@ -411,7 +413,7 @@ def _scaled(x0, spans, f):
     return x
 
 
-def _jacobian(fun, J, spans, model_at=None, tag=()):
+def _jacobian(fun, J, spans, model_at=None, tag=(), prefetch=None):
     """The Jacobian at x: J with the `spans` columns re-taken by the model (forward differences).
     model_at(x): the (case, stiffness) fun(x) solves; with it each column's solves start from the
     model at x's states plus the column's state change at the previous iterate (simulate.tangent_seeds:
@@ -419,7 +421,8 @@ def _jacobian(fun, J, spans, model_at=None, tag=()):
     same column of the same cause in a refit after a drop shares its state change).
     A column is a secant over [x_j, x_j + h]: where no re-taken coordinate has moved by more than
     REUSE_SHARE h since the last re-take, the secants overlap by more than half and that Jacobian
-    is returned again instead of re-taking it."""
+    is returned again instead of re-taking it. prefetch(models): the re-taken columns' models solved
+    as one batch first (Run.prefetch: the worker processes), so the differences read them cached."""
     last = {}
 
     def jac(x):
@@ -430,6 +433,9 @@ def _jacobian(fun, J, spans, model_at=None, tag=()):
             return last["J"]
         Jx, r0 = J.copy(), fun(x)
         base = model_at(x) if model_at is not None else None
+        if prefetch is not None and base is not None:
+            steps = [(k0 + i, h) for k0, q, h in spans for i in range(q)]
+            prefetch([model_at(x + h * np.eye(len(x))[j]) + ((*base, tag[j]),) for j, h in steps])
         for k0, q, h in spans:
             for j in range(k0, k0 + q):
                 dx = np.zeros_like(x)

@@ -42,6 +42,7 @@ friction is not in this path (dynamics.losses.operating.friction_shift_arcsec: a
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import inspect
@@ -314,9 +315,9 @@ def _seeded(key, solved) -> np.ndarray:
     return carrier
 
 
-def _prefetch(case, stiffness, records, n: int, pool) -> None:
-    """Solve the steady records' grids missing from the carrier cache on `pool`'s processes."""
-    jobs = {}
+def _grid_jobs(case, stiffness, records, n: int, jobs: dict) -> None:
+    """Add to `jobs` the steady records' grids of (case, stiffness) missing from the carrier cache,
+    each with its seeds as the current seed scope gives them (_seeds_for)."""
     for r in records:
         if not _steady(case, r):
             continue
@@ -326,13 +327,41 @@ def _prefetch(case, stiffness, records, n: int, pool) -> None:
         T = np.full(ang.shape, mechanism_torque(case, np.float64(r.torque_Nm), d, cond))
         key, mech, _ = _carrier_key(case, stiffness, ang, T, d, cond)
         if key not in _CARRIERS and key not in jobs:
-            jobs[key] = (mech, ang, T, d)
+            jobs[key] = (mech, stiffness, ang, T, d, _seeds_for(key))
+
+
+def _prefetch(case, stiffness, records, n: int, pool) -> None:
+    """Solve the steady records' grids missing from the carrier cache on `pool`'s processes."""
+    prefetch_models([(case, stiffness, None)], records, n, pool)
+
+
+def prefetch_models(models, records, n: int, pool) -> None:
+    """Solve on `pool` every steady record's grid of every model in `models`, a list of (case,
+    stiffness, tangent) with tangent None or the (base case, base stiffness, tag) of a Jacobian
+    column (tangent_seeds): the fit's re-taken columns go to the workers as one batch instead of
+    one model at a time (each model has only as many grids as records, fewer than a batch keeps two
+    workers busy with). Seeds and the kept states are those the solves one by one would use, but
+    for the fallback seeds (the last model solved before the batch rather than the previous column):
+    the same equilibria to the Newton tolerance."""
+    if pool is None:
+        return
+    batches = []
+    jobs: dict = {}
+    for case, stiffness, tangent in models:
+        mine: dict = {}
+        with tangent_seeds(*tangent) if tangent is not None else contextlib.nullcontext():
+            _grid_jobs(case, stiffness, records, n, mine)
+        mine = {k: v for k, v in mine.items() if k not in jobs}
+        jobs.update(mine)
+        batches.append((tangent, list(mine)))
     if len(jobs) < 2:
         return
-    futures = {k: pool.submit(_solve_grid, mech, stiffness, ang, T, d, _seeds_for(k))
-               for k, (mech, ang, T, d) in jobs.items()}
-    for k, f in futures.items():
-        _cached(_CARRIERS, k, lambda: _seeded(k, f.result()))
+    futures = {k: pool.submit(_solve_grid, mech, stiff, ang, T, d, seeds)
+               for k, (mech, stiff, ang, T, d, seeds) in jobs.items()}
+    for tangent, keys in batches:          # kept in the order the models were given, in their scopes
+        with tangent_seeds(*tangent) if tangent is not None else contextlib.nullcontext():
+            for k in keys:
+                _cached(_CARRIERS, k, lambda: _seeded(k, futures[k].result()))
 
 
 def simulate_records(te_model: TEModel, case, stiffness, records, points_per_rev: int | None = None,
