@@ -149,3 +149,18 @@ def test_holdout_takes_the_median_torque_group():
     fit, hold = holdout_split(recs, group_records(recs))
     assert [recs[k].torque_Nm for k in hold] == pytest.approx([0.3 * 412, -0.3 * 412])
     assert holdout_split(recs[:1], ["a"]) == ([0], [])
+
+
+def test_the_diagnosis_does_not_depend_on_the_order_the_records_are_given_in():
+    """The same records in another order (a shell glob, another tool's list), with one pair held out
+    by index: the same causes, parameters and gains to the last digit, records listed by torque,
+    forward first (the order the virtual bench makes them in)."""
+    eff = draw_effect(np.random.default_rng(3), CASE, drawable_causes()[0])
+    recs = bench_records(toy_te, CASE, STIFF, [eff], seed=3)
+    shuffled = [recs[k] for k in (5, 0, 3, 1, 4, 2)]
+    a = diagnose(CASE, STIFF, recs, toy_te, points_per_rev=256, holdout_records=(2, 3))
+    b = diagnose(CASE, STIFF, shuffled, toy_te, points_per_rev=256, holdout_records=(5, 2))   # the same two
+    assert a.extension.causes == b.extension.causes and a.cause == b.cause
+    assert a.extension.parameters == b.extension.parameters
+    assert (a.extension.gain, a.extension.holdout_gain) == (b.extension.gain, b.extension.holdout_gain)
+    assert [r.name for r in a.records] == [r.name for r in b.records] == [r.name for r in recs]
