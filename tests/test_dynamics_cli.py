@@ -188,3 +188,15 @@ def test_a_bad_forms_option_is_one_error_line(tmp_path, stiffness_file, forms, c
                  "--forms", forms]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("error:") and "constant, square, sine, trapezoid" in err
+
+
+def test_a_run_oil_temperature_outside_the_lubricant_s_range_is_a_one_line_error(tmp_path, stiffness_file, capsys):
+    # the record's drag is read at [lubrication] run_oil_temperature_C: outside [min, max] it names the key
+    text = case_path().read_text().replace("[lubrication]", "[lubrication]\nrun_oil_temperature_C = 200.0", 1)
+    case, out = tmp_path / "hot.toml", tmp_path / "r.csv"
+    case.write_text(text)
+    rc = main(["simulate", "--case", str(case), "--stiffness", str(stiffness_file), "--load", "constant:100",
+               "--duration", "0.2", "--out", str(out)])
+    assert rc == 2 and not out.exists()
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "run_oil_temperature_C = 200.0" in err and "[-10, 120]" in err
