@@ -59,9 +59,8 @@ def cmd_simulate(args) -> int:
     from dynamics.losses.contacts import carrier_drag_Nm
     from dynamics.losses.lubricant import Lubricant
     oil_C = model.case.lubrication.run_oil_temperature_C
-    lub = Lubricant.from_section(model.case.lubrication)
-    lub.check_temperature(oil_C, f"{model.case.source or 'case'}: [lubrication] run_oil_temperature_C")
-    drag = carrier_drag_Nm(model.case, lub, speed, oil_C)
+    drag = carrier_drag_Nm(model.case, Lubricant.from_section(model.case.lubrication), speed, oil_C,
+                           f"{model.case.source or 'case'}: [lubrication] run_oil_temperature_C")
     t0 = time.perf_counter()
     res = simulate(model, load, duration_s=args.duration, input_speed_rpm=speed,
                    direction=-1 if args.backward else 1, dt_s=args.dt, store_pin_forces=False,

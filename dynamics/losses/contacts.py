@@ -239,13 +239,15 @@ def _carrier_drag_parts(case, lub: Lubricant, output_speed_rpm: float, nu_cSt: f
     return M_main, brg.seal_moment_Nm(sec.output_seal_diameter_mm)
 
 
-def carrier_drag_Nm(case, lub: Lubricant, input_speed_rpm: float, oil_temperature_C: float) -> float:
+def carrier_drag_Nm(case, lub: Lubricant, input_speed_rpm: float, oil_temperature_C: float,
+                    where: str = "oil temperature") -> float:
     """The torque [N m, >= 0] that resists the carrier's motion whatever the load: the main bearings'
     no-load moment and the output seal, at the input speed's output speed and the oil temperature
     (the carrier_drag_Nm of contact_friction, without a state: it depends on neither). A running
     reducer's mechanism carries load + drag; a bench's torque meter beyond the output reads the load.
-    At rest (speed 0) the bearings' viscous part vanishes and the seal's remains."""
-    lub.check_temperature(oil_temperature_C)
+    At rest (speed 0) the bearings' viscous part vanishes and the seal's remains. `where` names the
+    temperature in the error when it lies outside the lubricant's range."""
+    lub.check_temperature(oil_temperature_C, where)
     n_out = abs(float(input_speed_rpm)) / case.ratio
     return float(sum(_carrier_drag_parts(case, lub, n_out, float(lub.kinematic_cSt(oil_temperature_C)),
                                          input_speed_rpm != 0)))

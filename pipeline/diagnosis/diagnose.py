@@ -172,11 +172,6 @@ def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_ent
     else:
         fit_idx, hold_idx = holdout_split(records, groups) if holdout else (list(range(n)), [])
     named = fit_idx if holdout_records is not None else list(range(n))
-
-    def prefetch(models, idx):     # the fit's re-taken Jacobian columns, one batch on the workers
-        if pool is not None and getattr(te_model, "__wrapped__", te_model) is quasi_static_te:
-            prefetch_models(models, [records[k] for k in idx], points_per_rev, pool)
-
     lib = _library(case, stiffness, records, groups, resid, sim0, te_of, by_id, max_order)
     rows = _rows_of(lib.fmaps, named)
     result = match(lib.y[rows], lib.w[rows], offset_columns(lib.fmaps, groups, named),
@@ -186,6 +181,9 @@ def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_ent
 
     extension, after, dropped = None, None, []
     if result.selected:
+        # the fit's re-taken Jacobian columns, one batch on the workers (no pool: nothing to do)
+        def prefetch(models, idx):
+            prefetch_models(models, [records[k] for k in idx], points_per_rev, pool)
         run = Run(case, stiffness, records, groups, meas, te_of, te_model, lib.fmaps, lib.w, noise, prefetch)
         extension, after, ext_notes, dropped = extend(run, [by_id[s.cause] for s in result.selected],
                                                       {c.cause: c for c in lib.fit_cols}, fit_idx, hold_idx,

@@ -433,18 +433,20 @@ def _jacobian(fun, J, spans, model_at=None, tag=(), prefetch=None):
             return last["J"]
         Jx, r0 = J.copy(), fun(x)
         base = model_at(x) if model_at is not None else None
-        if prefetch is not None and base is not None:
-            steps = [(k0 + i, h) for k0, q, h in spans for i in range(q)]
-            prefetch([model_at(x + h * np.eye(len(x))[j]) + ((*base, tag[j]),) for j, h in steps])
+        steps = []                      # (column, its step h, x moved by h along it)
         for k0, q, h in spans:
             for j in range(k0, k0 + q):
-                dx = np.zeros_like(x)
-                dx[j] = h
-                if base is None:
-                    Jx[:, j] = (fun(x + dx) - r0) / h
-                else:
-                    with tangent_seeds(*base, tag[j]):
-                        Jx[:, j] = (fun(x + dx) - r0) / h
+                xj = x.copy()
+                xj[j] += h
+                steps.append((j, h, xj))
+        if prefetch is not None and base is not None:
+            prefetch([model_at(xj) + ((*base, tag[j]),) for j, _, xj in steps])
+        for j, h, xj in steps:
+            if base is None:
+                Jx[:, j] = (fun(xj) - r0) / h
+            else:
+                with tangent_seeds(*base, tag[j]):
+                    Jx[:, j] = (fun(xj) - r0) / h
         last.update(x=x.copy(), J=Jx)
         return Jx
     return jac
