@@ -284,7 +284,10 @@ def test_an_unloaded_run_with_the_carrier_drag_sits_on_the_flank_the_statics_giv
     time integration floats in the free play (measured: TE std 12.7 arcsec, mean -0.6 against the
     statics' -23.4 forward), which no bench shows and the diagnosis' quasi-static model does not
     make; with the case's drag (2.07 N m at 1200 rpm, 25 C) it runs on the flank of the motion
-    within 0.06 arcsec of the static equilibria under the same drag, sample by sample."""
+    within 0.06 arcsec of the static equilibria under the same drag, sample by sample. Tolerances:
+    0.2 arcsec (three times the measured dynamic ripple about the statics: the HHT run's contact
+    vibration at 1200 rpm); on the flank = more than 10 arcsec off the kinematic zero (the free
+    play's half, 23 arcsec, measured); floating = a TE std above 5 arcsec (12.7 measured)."""
     from dynamics.loads import LoadSpec
     from dynamics.losses.contacts import carrier_drag_Nm
     from dynamics.model import simulate
