@@ -240,7 +240,7 @@ def _case_figures(case, stiffness, lub) -> dict:
     """Rated point (rated torque, rated output speed, 40 C), starting torque, bearing lives."""
     from dynamics.losses import operating_point
     from dynamics.losses.life import bearing_lives
-    from dynamics.losses.operating import starting_torque_Nm
+    from dynamics.losses.operating import friction_lever, starting_torque_Nm
     from dynamics.reducer import build_model
     model = build_model(case, stiffness)
     n_in = case.operation.rated_output_speed_rpm * case.ratio
@@ -251,11 +251,14 @@ def _case_figures(case, stiffness, lub) -> dict:
                               "pin_friction_mean": float(np.nanmean(op.forward.pin_mu)),
                               "pin_film_parameter_mean": float(np.nanmean(op.forward.pin_film_parameter))}
     life = bearing_lives(model, lub, 40.0)
+    # how much of the running friction loads the compliance (dynamics.losses.operating.FrictionLever)
+    lever = [friction_lever(model, lub, case.rated_torque_Nm, n, 25.0).summary()
+             for n in sorted({n_in, case.operation.input_speed_rpm})]
     return {"rated_point": {"input_speed_rpm": n_in, "torque_Nm": case.rated_torque_Nm, "oil_temperature_C": 40.0,
                             **rated["40"], "at_25C": rated["25"], "published": PUBLISHED_EFFICIENCY},
             "starting_torque_input_Nm": {"25": starting_torque_Nm(model, lub, 25.0),
                                          "40": starting_torque_Nm(model, lub, 40.0)},
-            "bearing_life": life}
+            "bearing_life": life, "friction_lever": lever}
 
 
 def _jsonable(x):

@@ -25,6 +25,7 @@ sliding contact at boundary friction (Lambda = 0) and the bearings at Palmgren's
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -315,6 +316,60 @@ def simulate_condition(model: ReducerModel, lub: Lubricant, input_angle_deg, tor
     lub.check_temperature(oil_temperature_C)
     return run_direction(model, lub, input_speed_rpm, torque_Nm, oil_temperature_C, direction,
                          np.atleast_1d(np.asarray(input_angle_deg, float)), friction)
+
+
+@dataclass(frozen=True)
+class FrictionLever:
+    """How much of the running friction loads the reducer's compliance, at one static state.
+
+    By Maxwell-Betti, the output shift the friction loads f cause (the statics re-solved with them,
+    input held) is f . u, u = K^-1 e_out the deflection per unit output torque (K the tangent, its
+    mean over the frictionless and the friction state: the Hertzian contacts stiffen a little in
+    between). Friction that loaded the compliance as the torque does (every internal force x 1/eta)
+    would shift the output by windup x loss_share; `lever` = (shift / windup) / loss_share says which
+    share of that it does. The friction of the cycloid-pin contacts (most of the loss) acts along
+    the contact tangents, nearly at right angles to the motion the wind-up gives the disc there."""
+    torque_Nm: float
+    input_speed_rpm: float
+    oil_temperature_C: float
+    windup_arcsec: float          # the output's lag under T on the tangent at the frictionless state (TE sign)
+    shift_arcsec: float           # friction statics minus frictionless, output angle
+    reciprocity_arcsec: float     # f_friction . u (mean tangent): the check of shift_arcsec
+    loss_share: float             # friction power of the applied contacts / output power
+
+    @property
+    def lever(self) -> float:
+        return (self.shift_arcsec / self.windup_arcsec) / self.loss_share if self.loss_share > 0 else math.nan
+
+    def summary(self) -> dict:
+        return {**dataclasses.asdict(self), "lever": self.lever}
+
+
+def friction_lever(model: ReducerModel, lub: Lubricant, torque_Nm: float, input_speed_rpm: float,
+                   oil_temperature_C: float, input_angle_deg: float = 7.0) -> FrictionLever:
+    """FrictionLever of the forward run at one input angle (the shift is flat in angle: below)."""
+    if not (math.isfinite(torque_Nm) and torque_Nm > 0):
+        raise DynamicsError(f"torque = {torque_Nm!r} N m: must be finite and > 0 (a loaded state)")
+    if not (math.isfinite(input_speed_rpm) and input_speed_rpm > 0):
+        raise DynamicsError(f"input speed = {input_speed_rpm!r} rpm: must be finite and > 0")
+    lub.check_temperature(oil_temperature_C)
+    io, th = model.i_out, math.radians(input_angle_deg)
+    om = input_speed_rpm / RPM_PER_RAD_S
+    qdot = rates(model, th) * om
+    st = solve_static(model, input_angle_deg, torque_Nm, None, +1)
+    qf, fr, _ = friction_equilibrium(model, lub, st.q, th, torque_Nm, qdot, oil_temperature_C, om)
+    e = np.zeros(model.n_dof)
+    e[io] = 1.0
+    tangents = [evaluate(model, q, th, want_k=True)[0].K for q in (st.q, qf)]
+    u0 = np.linalg.solve(0.5 * (tangents[0] + tangents[0].T), e)
+    um = np.linalg.solve(0.25 * sum(k + k.T for k in tangents), e)
+    applied = fr.power_W["pins"] + fr.power_W["needles"] + fr.power_W["supports"]
+    return FrictionLever(torque_Nm=float(torque_Nm), input_speed_rpm=float(input_speed_rpm),
+                         oil_temperature_C=float(oil_temperature_C),
+                         windup_arcsec=float(-torque_Nm * u0[io] * ARCSEC_PER_RAD),
+                         shift_arcsec=float((qf[io] - st.q[io]) * ARCSEC_PER_RAD),
+                         reciprocity_arcsec=float(fr.force @ um * ARCSEC_PER_RAD),
+                         loss_share=float(applied / (torque_Nm * abs(qdot[io]))))
 
 
 SHIFT_POINTS = 3   # input angles the friction shift is averaged over (it is flat in angle: below)
