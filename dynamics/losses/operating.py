@@ -185,6 +185,20 @@ def run_direction(model: ReducerModel, lub: Lubricant, input_speed_rpm: float, t
                         newton_iterations=iters)
 
 
+def check_condition(lub: Lubricant, input_speed_rpm: float, torque_Nm: float, oil_temperature_C: float,
+                    loaded: bool = False) -> None:
+    """One error line for a condition the operating model cannot run: speed finite and > 0, torque
+    finite and >= 0 (the load's magnitude; > 0 where a loaded state is asked for), the oil temperature
+    inside the lubricant's range."""
+    if not (math.isfinite(input_speed_rpm) and input_speed_rpm > 0):
+        raise DynamicsError(f"input speed = {input_speed_rpm!r} rpm: must be finite and > 0")
+    if loaded and not (math.isfinite(torque_Nm) and torque_Nm > 0):
+        raise DynamicsError(f"torque = {torque_Nm!r} N m: must be finite and > 0 (a loaded state)")
+    if not (math.isfinite(torque_Nm) and torque_Nm >= 0):
+        raise DynamicsError(f"torque = {torque_Nm!r} N m: must be finite and >= 0 (the load's magnitude)")
+    lub.check_temperature(oil_temperature_C)
+
+
 def revolution_angles_deg(model: ReducerModel, points_per_rev: int = POINTS_PER_REV) -> np.ndarray:
     """Input angles over one output revolution, offset half a step from zero."""
     n = int(points_per_rev)
@@ -196,11 +210,7 @@ def operating_point(model: ReducerModel, lub: Lubricant, input_speed_rpm: float,
                     friction: bool = True) -> OperatingPoint:
     """TE in each direction, gap, efficiency and input torque at one condition (see module doc).
     torque_Nm >= 0 is the load's magnitude (resisting the motion in both directions)."""
-    if not (math.isfinite(input_speed_rpm) and input_speed_rpm > 0):
-        raise DynamicsError(f"input speed = {input_speed_rpm!r} rpm: must be finite and > 0")
-    if not (math.isfinite(torque_Nm) and torque_Nm >= 0):
-        raise DynamicsError(f"torque = {torque_Nm!r} N m: must be finite and >= 0 (the load's magnitude)")
-    lub.check_temperature(oil_temperature_C)
+    check_condition(lub, input_speed_rpm, torque_Nm, oil_temperature_C)
     ang = revolution_angles_deg(model, points_per_rev)
     runs = [run_direction(model, lub, input_speed_rpm, torque_Nm, oil_temperature_C, s, ang, friction)
             for s in (1, -1)]
@@ -309,11 +319,7 @@ def simulate_condition(model: ReducerModel, lub: Lubricant, input_angle_deg, tor
     te_frictionless_arcsec, losses). The angles are solved in order, warm-started."""
     if direction not in (1, -1):
         raise DynamicsError(f"direction = {direction!r}: allowed +1 (forward) or -1 (backward)")
-    if not (math.isfinite(input_speed_rpm) and input_speed_rpm > 0):
-        raise DynamicsError(f"input speed = {input_speed_rpm!r} rpm: must be finite and > 0")
-    if not (math.isfinite(torque_Nm) and torque_Nm >= 0):
-        raise DynamicsError(f"torque = {torque_Nm!r} N m: must be finite and >= 0 (the load's magnitude)")
-    lub.check_temperature(oil_temperature_C)
+    check_condition(lub, input_speed_rpm, torque_Nm, oil_temperature_C)
     return run_direction(model, lub, input_speed_rpm, torque_Nm, oil_temperature_C, direction,
                          np.atleast_1d(np.asarray(input_angle_deg, float)), friction)
 
@@ -348,11 +354,7 @@ class FrictionLever:
 def friction_lever(model: ReducerModel, lub: Lubricant, torque_Nm: float, input_speed_rpm: float,
                    oil_temperature_C: float, input_angle_deg: float = 7.0) -> FrictionLever:
     """FrictionLever of the forward run at one input angle (the shift is flat in angle: below)."""
-    if not (math.isfinite(torque_Nm) and torque_Nm > 0):
-        raise DynamicsError(f"torque = {torque_Nm!r} N m: must be finite and > 0 (a loaded state)")
-    if not (math.isfinite(input_speed_rpm) and input_speed_rpm > 0):
-        raise DynamicsError(f"input speed = {input_speed_rpm!r} rpm: must be finite and > 0")
-    lub.check_temperature(oil_temperature_C)
+    check_condition(lub, input_speed_rpm, torque_Nm, oil_temperature_C, loaded=True)
     io, th = model.i_out, math.radians(input_angle_deg)
     om = input_speed_rpm / RPM_PER_RAD_S
     qdot = rates(model, th) * om
