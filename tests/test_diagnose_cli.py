@@ -40,6 +40,13 @@ def test_cli_writes_exact_keys_and_an_offscreen_page(tmp_path, capsys):
     assert d["extension"]["holdout_gain"] is not None   # one pair: the backward run is held out
     page = (out / "index.html").read_text()
     assert "residual_time.png" in page and (out / "residual_orders.png").stat().st_size > 1000
+    # the direction split and the angle frames in a sidecar (diagnosis.json keeps DESIGN.md's keys)
+    lines = json.loads((out / "diagnosis_lines.json").read_text())
+    assert set(lines) == {"lines_by_direction", "angle_frames"}
+    assert lines["angle_frames"] == []                  # one encoder zero: nothing to lay on another
+    before = lines["lines_by_direction"]["before"]
+    assert before and before[0]["order"] == 1 and before[0]["levels"][0]["reading"] == "common to both directions"
+    assert "Lines by direction of motion" in page
 
 
 def test_a_missing_stiffness_is_one_clear_line(tmp_path, capsys, monkeypatch):

@@ -12,7 +12,11 @@ diagnose(case, stiffness, records) runs blind on the records (conditions read fr
   4. extension (extension.py): the named causes' parameters fitted with the model in the loop,
      bounded to each cause's physical range; a cause on its bound or whose effect is below the
      records' noise floor is dropped (a note says why) and never reported;
-  5. what the residual left holds that no reported cause explains (unexplained.py): one line each.
+  5. what the residual left holds that no reported cause explains (unexplained.py): one line each;
+     the strongest lines before and after, split into the part common to both directions of motion
+     and the part that reverses with it (directions.py: which kind of error made each); whether
+     the records share one output-angle zero, read off the mechanism's lines (frames.py: reported,
+     not applied).
 Hold-out rule: with >= 3 zero groups the group of median |torque| (an interpolation check), with 2
 the last group given, with 1 group of several records the last record, with 1 record none.
 Limits: quasi-static model (no speed effects); constant torque per record; findings rank the
@@ -25,7 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from dynamics.records import BenchRecord
-from pipeline.diagnosis import causes as registry
+from pipeline.diagnosis import causes as registry, directions
+from pipeline.diagnosis.directions import direction_split
+from pipeline.diagnosis.frames import frame_notes, frame_shifts
 from pipeline.diagnosis.causes.base import Evidence
 from pipeline.diagnosis.extension import Extension, Run, extend
 from pipeline.diagnosis.features import FeatureMap
@@ -36,7 +42,7 @@ from pipeline.diagnosis.signatures import SignatureSummary, signature_columns, s
 from pipeline.diagnosis.significance import Line, noise_floor_arcsec, test_lines
 from pipeline.diagnosis.simulate import (TEModel, default_points_per_rev, max_order as order_limit, process_pool,
                                          prefetch_models, quasi_static_te, seeding, simulate_records)
-from pipeline.diagnosis.unexplained import torque_sign_notes, unexplained
+from pipeline.diagnosis.unexplained import strongest_lines, torque_sign_notes, unexplained
 from pipeline.diagnosis.zeros import group_records, offset_columns, remove_offsets, rms
 
 __all__ = ["Diagnosis", "Extension", "Finding", "diagnose", "holdout_split", "remove_offsets", "rms"]
@@ -70,6 +76,14 @@ class Diagnosis:
     summaries: tuple[SignatureSummary, ...] = ()
     notes: tuple[str, ...] = ()                   # input repairs, dropped causes, unexplained residual
     noise_arcsec: float = 0.0                     # the records' noise floor (significance.py)
+    line_directions: dict | None = None           # {"before", "after"}: directions.table of the strongest lines
+    angle_frames: tuple = ()                      # frames.FrameShift per encoder-zero group beyond the first
+
+    def lines_json(self) -> dict:
+        """diagnosis_lines.json (beside diagnosis.json, which keeps DESIGN.md's keys): the strongest
+        lines split by direction of motion, before and after, and the records' angle frames."""
+        return {"lines_by_direction": self.line_directions,
+                "angle_frames": [f.to_json() for f in self.angle_frames]}
 
     def to_json(self) -> dict:
         ext = None
@@ -88,6 +102,9 @@ class Diagnosis:
                              "residual_pp_arcsec": self.residual_pp_arcsec},
                 "extension": ext,
                 "notes": list(self.notes)}   # input repairs (warnings), causes not reported, residual left
+
+
+LINE_TABLE = 6    # strongest residual lines per table (before, after) split by direction
 
 
 def holdout_split(records, groups) -> tuple[list[int], list[int]]:
@@ -197,10 +214,28 @@ def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_ent
         set(dropped))
     notes += unexplained(case, records, groups, after if after is not None else before, noise,
                          explained=extension is not None)
+    shifts = frame_shifts(case, records, groups, before, max_order)
+    notes += frame_notes(records, groups, shifts)
+    line_dirs = _line_directions(case, records, groups, before, after, noise)
     return Diagnosis(findings[0].cause if findings else None, tuple(findings), rms(before),
                      max(float(np.ptp(r)) for r in before), extension, tuple(records), tuple(groups),
                      tuple(meas), tuple(sim0), tuple(before), tuple(after) if after is not None else None,
-                     tuple(lines), lib.summaries, tuple(notes), noise)
+                     tuple(lines), lib.summaries, tuple(notes), noise, line_dirs, shifts)
+
+
+def _line_directions(case, records, groups, before, after, noise) -> dict | None:
+    """The strongest residual lines before and after the extension (both sets of orders in both
+    tables), each split into its common and reversing parts (directions.py); None when no group
+    holds both directions at a torque."""
+    orders = set(strongest_lines(case, records, before, noise, LINE_TABLE))
+    if after is not None:
+        orders |= set(strongest_lines(case, records, after, noise, LINE_TABLE))
+    orders = tuple(sorted(orders))
+    split_before = direction_split(records, groups, before, orders)
+    if not split_before:
+        return None
+    return {"before": directions.table(case, split_before),
+            "after": directions.table(case, direction_split(records, groups, after, orders)) if after is not None else None}
 
 
 def _rows_of(fmaps, idx) -> np.ndarray:

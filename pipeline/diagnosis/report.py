@@ -128,6 +128,7 @@ def write_report(diag, case, out_dir) -> Path:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out / "diagnosis.json", diag.to_json())
+    write_json_atomic(out / "diagnosis_lines.json", diag.lines_json())
     rows = attribute_lines(diag, case)
     _plot_time(diag, out / "residual_time.png")
     plot_orders(diag, case, out / "residual_orders.png", rows)
@@ -426,6 +427,42 @@ def _lines_table(diag, rows: list[LineRow]) -> str:
             + f"<th>cause</th></tr>{body}</table>")
 
 
+def _directions_table(diag) -> str:
+    """The strongest lines split into their common and reversing parts (directions.py), before ->
+    after the extension, per torque level; and the angle frames (frames.py)."""
+    e = html.escape
+    tab = diag.line_directions
+    if not tab:
+        return "<p>none: no encoder zero holds both directions at a torque</p>"
+    after = {row["order"]: {lv["torque_Nm"]: lv for lv in row["levels"]} for row in (tab.get("after") or [])}
+
+    def cell(lv, new, part):
+        a = f"{lv[part]['amplitude_arcsec']:.2f}"
+        return a + ("" if new is None else f" &rarr; {new[part]['amplitude_arcsec']:.2f}")
+    body = ""
+    for row in tab["before"]:
+        for lv in row["levels"]:
+            new = after.get(row["order"], {}).get(lv["torque_Nm"])
+            body += (f"<tr><td>{row['order']}x</td><td>{e(row['label']) or '&ndash;'}</td><td>{lv['torque_Nm']:g}</td>"
+                     f"<td>{cell(lv, new, 'common')}</td><td>{cell(lv, new, 'reversing')}</td>"
+                     f"<td>{e(lv['reading'])}{'' if new is None else ' &rarr; ' + e(new['reading'])}</td></tr>")
+    frames = "".join(f"<li>{e(f.group)}: {f.shift_deg:+.3f} &plusmn; {1.96 * f.sd_deg:.3f} deg from {e(f.reference)}, "
+                     f"{f.mismatch_removed:.0%} of the phasor mismatch removed; "
+                     f"{'reported' if f.reported else 'not reported'}</li>" for f in diag.angle_frames)
+    return ("<table border=1><tr><th>order</th><th>characteristic order</th><th>|torque| N.m</th>"
+            "<th>common to both directions</th><th>reversing with the motion</th><th>reading</th></tr>"
+            f"{body}</table><p>Angle frames (the mechanism's lines of each encoder zero laid on the first):</p>"
+            f"<ul>{frames or '<li>one encoder zero only</li>'}</ul>")
+
+
+_DIRECTIONS_CAPTION = (
+    "Amplitude [arcsec] before -> after the extension. Common: the same in both directions (a position-type "
+    "error: a pin or hole off tangentially, a timing, a coaxiality, a reading; or a compliance under a load "
+    "that keeps its sign). Reversing: opposite in the two directions (a clearance-type error: a pin off "
+    "radially, a pin radius; or a compliance under the signed torque). A geometric error is there at zero "
+    "torque, a compliance grows from zero.")
+
+
 _ORDERS_CAPTION = (
     "One panel per torque level. Grey: the residual spectra before the extension; blue / orange: "
     "forward / backward after it; dashed: the records' noise floor. Each significant line (false alarm "
@@ -477,6 +514,7 @@ alt="residual order spectra per torque level, before and after, each significant
 {diag.noise_arcsec:.3g} arcsec)</h2>
 <p>amplitude before &rarr; after the extension [arcsec] per |torque| [N.m] and direction; &ndash;: not a line
 there</p>{lines}
+<h2>Lines by direction of motion</h2><p>{e(_DIRECTIONS_CAPTION)}</p>{_directions_table(diag)}
 <h2>Signature library (model, unit size)</h2><table border=1><tr><th>cause</th><th>orders</th><th>arcsec per unit</th></tr>{sig}</table>
 </body></html>
 """

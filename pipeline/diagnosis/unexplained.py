@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.diagnosis.causes.base import TORQUE_TOL_NM, torque_levels, trend
+from pipeline.diagnosis.directions import direction_split, split_text
 from pipeline.diagnosis.orders import label_order, spectrum_of
 from pipeline.diagnosis.significance import test_lines
 from pipeline.diagnosis.zeros import rms
@@ -43,13 +44,14 @@ def unexplained(case, records, groups, residuals, noise: float, explained: bool)
     means = rms([np.full(1, float(np.mean(r))) for r in residuals])
     what = "after the extension" if explained else "with no cause reported"
     out.append(f"{total:.3g} arcsec RMS left {what} (noise floor {noise:.3g} arcsec; record means "
-               f"{means:.3g} arcsec RMS){_lines_text(case, records, residuals, noise)}: no registered cause "
+               f"{means:.3g} arcsec RMS){_lines_text(case, records, groups, residuals, noise)}: no registered cause "
                f"explains it")
     return out
 
 
-def _lines_text(case, records, residuals, noise: float) -> str:
-    """'; strongest lines: 39x (zc=39x ...) 9.7 arcsec at 300 N.m, ...; growing with torque, ...'"""
+def strongest_lines(case, records, residuals, noise: float, count: int = MAX_LINES) -> dict[int, list]:
+    """{order: [(|torque|, amplitude), ...]} of the `count` strongest lines that are significant and
+    above the noise floor in some record, strongest first."""
     found: dict[int, list] = {}
     for rec, r in zip(records, residuals):
         spec = spectrum_of(rec.output_angle_deg, r)
@@ -57,17 +59,26 @@ def _lines_text(case, records, residuals, noise: float) -> str:
         for line in test_lines(spec, range(1, top + 1)):
             if line.significant and line.amplitude >= noise:   # significant and an effect
                 found.setdefault(int(round(line.order)), []).append((abs(rec.torque_Nm), line.amplitude))
+    best = sorted(found, key=lambda k: -max(a for _, a in found[k]))[:count]
+    return {k: found[k] for k in best}
+
+
+def _lines_text(case, records, groups, residuals, noise: float) -> str:
+    """'; strongest lines: 39x (zc=39x ...) 9.7 arcsec at 300 N.m, ...; growing with torque, reverses
+    with the motion (...)' (directions.py: where a group holds both directions at a torque)."""
+    found = strongest_lines(case, records, residuals, noise)
     if not found:
         return ""
-    best = sorted(found, key=lambda k: -max(a for _, a in found[k]))[:MAX_LINES]
+    splits = direction_split(records, groups, residuals, tuple(found))
     items = []
-    for k in best:
-        pts = sorted(found[k])
+    for k, pts in found.items():
+        pts = sorted(pts)
         levels = torque_levels([t for t, _ in pts])
         amps = [max(a for t, a in pts if abs(t - lv) <= TORQUE_TOL_NM) for lv in levels]   # largest per torque level
         label = label_order(case, k)
+        how = split_text(case, splits, k)
         items.append(f"{k}x{f' ({label})' if label else ''} {'/'.join(f'{a:.2g}' for a in amps)} arcsec "
-                     f"at {'/'.join(f'{t:g}' for t in levels)} N.m, {trend(pts)}")
+                     f"at {'/'.join(f'{t:g}' for t in levels)} N.m, {trend(pts)}{f', {how}' if how else ''}")
     return "; strongest lines " + "; ".join(items)
 
 
