@@ -4,7 +4,8 @@ records with chosen lines, and on the real RV-160N records where they are beside
 Split: a line added with one sign to both directions is all common, one with opposite signs all
 reversing, each recovered with its phase whatever the direction the angle runs. Frames: one group's
 recorded output angle moved by a known shift is found within its interval and reported; records
-in one frame report nothing, whatever their lines do with torque."""
+in one frame report nothing, whatever their lines do with torque. Gap shape (unexplained.py): a
+straight half-gap against a bent one is said, with which of the two bends."""
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,7 @@ from dynamics.records import BenchRecord, read_records
 from geometry.params import load_case
 from pipeline.diagnosis.directions import direction_split, line_phasor, split_text
 from pipeline.diagnosis.frames import best_shift, frame_notes, frame_shifts, mechanism_orders
+from pipeline.diagnosis.unexplained import departure_from_line, gap_shape_notes, half_gaps
 from pipeline.diagnosis.zeros import group_records
 
 ROOT = Path(__file__).parents[1]
@@ -135,3 +137,22 @@ def test_the_real_records_300_and_800_nm_pairs_sit_half_a_degree_from_the_0_and_
     splits = direction_split(recs, groups, te, (78, 156))
     assert all(s.reading == "common to both directions" for s in splits if s.order == 78)
     assert all(abs(s.reversing) > abs(s.common) for s in splits if s.order == 156)
+
+
+def test_the_gap_shape_note_says_who_bends_the_records_or_the_model():
+    torques = (0.0, 300.0, 800.0, 1800.0)
+    recs = [_record(t, d) for t in torques for d in (1, -1)]
+    groups = group_records(recs)
+    straight = {t: 16.0 + 0.121 * t for t in torques}                  # a bench's half-gap, straight
+    bent = {t: 24.0 + 0.09 * t - 4.0 * np.sin(np.pi * t / 1800) for t in torques}   # a model's, concave
+    meas = [np.full(N, -r.direction * straight[abs(r.torque_Nm)]) for r in recs]
+    sim = [np.full(N, -r.direction * bent[abs(r.torque_Nm)]) for r in recs]
+    res = [m - s for m, s in zip(meas, sim)]
+    assert list(half_gaps(recs, groups, meas).values()) == pytest.approx([-straight[t] for t in torques])
+    assert np.max(np.abs(departure_from_line(half_gaps(recs, groups, meas)))) < 1e-9
+    note = gap_shape_notes(recs, groups, meas, sim, res, noise=0.3)
+    assert len(note) == 1 and "the model bends where the records are straight" in note[0]
+    assert gap_shape_notes(recs, groups, sim, meas, [-r for r in res], noise=0.3)[0].count("records bend") == 1
+    # a residual within 3 noise floors of a line: nothing said; fewer than three levels: nothing said
+    assert gap_shape_notes(recs, groups, meas, sim, res, noise=2.0) == []
+    assert gap_shape_notes(recs[:4], groups[:4], meas[:4], sim[:4], res[:4], noise=0.3) == []

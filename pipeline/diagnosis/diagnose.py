@@ -42,7 +42,7 @@ from pipeline.diagnosis.signatures import SignatureSummary, signature_columns, s
 from pipeline.diagnosis.significance import Line, noise_floor_arcsec, test_lines
 from pipeline.diagnosis.simulate import (TEModel, default_points_per_rev, max_order as order_limit, process_pool,
                                          prefetch_models, quasi_static_te, seeding, simulate_records)
-from pipeline.diagnosis.unexplained import strongest_lines, torque_sign_notes, unexplained
+from pipeline.diagnosis.unexplained import gap_shape_notes, strongest_lines, torque_sign_notes, unexplained
 from pipeline.diagnosis.zeros import group_records, offset_columns, remove_offsets, rms
 
 __all__ = ["Diagnosis", "Extension", "Finding", "diagnose", "holdout_split", "remove_offsets", "rms"]
@@ -214,6 +214,7 @@ def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_ent
         set(dropped))
     notes += unexplained(case, records, groups, after if after is not None else before, noise,
                          explained=extension is not None)
+    notes += gap_shape_notes(records, groups, meas, sim0, after if after is not None else before, noise)
     shifts = frame_shifts(case, records, groups, before, max_order)
     notes += frame_notes(records, groups, shifts)
     line_dirs = _line_directions(case, records, groups, before, after, noise)

@@ -11,7 +11,13 @@
                    one direction stiffer) no registered cause models; said when it moves by more
                    than LEFT_FACTOR x the noise floor over the torques;
   torque sign      every loaded record's torque assisting its motion is DESIGN.md's convention
-                   reversed (+ resists forward rotation): most likely a sign-flipped column.
+                   reversed (+ resists forward rotation): most likely a sign-flipped column;
+  gap shape        the half-gap (forward minus backward mean of one encoder zero, halved) at >= 3
+                   torque levels, for the records and for the model: each one's largest departure from
+                   its own straight line in torque. When the residual's departs by more than
+                   LEFT_FACTOR x the noise floor, the note gives both: a model whose contacts engage and
+                   stiffen with load bends where a bench may be straight (or the reverse), and a
+                   compliance factor scales a curve, it cannot straighten it.
 """
 from __future__ import annotations
 
@@ -80,6 +86,44 @@ def _lines_text(case, records, groups, residuals, noise: float) -> str:
         items.append(f"{k}x{f' ({label})' if label else ''} {'/'.join(f'{a:.2g}' for a in amps)} arcsec "
                      f"at {'/'.join(f'{t:g}' for t in levels)} N.m, {trend(pts)}{f', {how}' if how else ''}")
     return "; strongest lines " + "; ".join(items)
+
+
+def half_gaps(records, groups, signals) -> dict[float, float]:
+    """|torque| -> (forward mean - backward mean) / 2 of the first pair of one encoder zero there."""
+    out: dict[float, float] = {}
+    for g in dict.fromkeys(groups):
+        idx = [k for k in range(len(records)) if groups[k] == g]
+        fw = [k for k in idx if records[k].direction > 0]
+        for k in fw:
+            t = abs(records[k].torque_Nm)
+            bw = next((j for j in idx if records[j].direction < 0
+                       and abs(abs(records[j].torque_Nm) - t) <= TORQUE_TOL_NM), None)
+            if bw is not None and not any(abs(t - lv) <= TORQUE_TOL_NM for lv in out):
+                out[t] = 0.5 * (float(np.mean(signals[k])) - float(np.mean(signals[bw])))
+    return dict(sorted(out.items()))
+
+
+def departure_from_line(points: dict[float, float]) -> np.ndarray:
+    """Values less their least-squares straight line in torque."""
+    t, v = np.array(list(points)), np.array(list(points.values()))
+    return v - np.polyval(np.polyfit(t, v, 1), t)
+
+
+def gap_shape_notes(records, groups, measured, simulated, residuals, noise: float) -> list[str]:
+    res = half_gaps(records, groups, residuals)
+    if len(res) < 3:
+        return []
+    dev = departure_from_line(res)
+    if np.max(np.abs(dev)) <= LEFT_FACTOR * noise:
+        return []
+    rec = np.max(np.abs(departure_from_line(half_gaps(records, groups, measured))))
+    mod = np.max(np.abs(departure_from_line(half_gaps(records, groups, simulated))))
+    levels = "/".join(f"{t:g}" for t in res)
+    return [f"gap shape: the residual half-gap (forward minus backward mean, halved) departs from a straight "
+            f"line in torque by {'/'.join(f'{d:+.2g}' for d in dev)} arcsec at {levels} N.m; the records' own "
+            f"half-gap departs from its straight line by up to {rec:.2g} arcsec, the model's (as given, before "
+            f"any cause) by {mod:.2g}: the {'model bends where the records are straight' if mod > rec else 'records bend where the model is straight'}, "
+            f"which a compliance factor scales but cannot straighten"]
 
 
 def _direction_asymmetry(records, groups, residuals, noise: float) -> list[str]:
