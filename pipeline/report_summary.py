@@ -159,6 +159,7 @@ def key_figures(case_dir: Path, rated_Nm: float | None, ratio: float | None) -> 
                         "-", "diagnosis/diagnosis.json",
                         f"baseline RMS over every record {_f(base, '.3g')} arcsec (one free offset per encoder zero); "
                         "the lines no cause explains are listed in the diagnosis section"))
+        rows += _record_reading_rows(read_json(case_dir / "diagnosis" / "diagnosis_lines.json"), diag)
     else:
         rows.append(Row("diagnosis of bench records", "no bench records for this case", "-", "diagnosis/"))
     comp = read_json(case_dir / "compensate" / "compensation.json")
@@ -174,6 +175,25 @@ def key_figures(case_dir: Path, rated_Nm: float | None, ratio: float | None) -> 
         rows.append(Row("paper 001 no-load bench case", _paper001_text(p001),
                         f"paper 001: measured {p001.get('measured_arcsec', float('nan')):g} arcsec p-p",
                         "diagnosis/paper001.json"))
+    return rows
+
+
+def _record_reading_rows(lines: dict | None, diag: dict) -> list[Row]:
+    """What the bench records say of themselves (diagnosis_lines.json, the diagnosis' notes): the
+    encoder-zero groups whose mechanism lines sit in another angle frame, and the gap's shape."""
+    rows = []
+    shifted = [f for f in (lines or {}).get("angle_frames", []) if f.get("reported")]
+    if lines is not None:
+        rows.append(Row("records' output-angle frames (mechanism lines laid on the first encoder zero)",
+                        "; ".join(f"{'/'.join(f'{t:g}' for t in f.get('torques_Nm', [])) or f['group']} N m records "
+                                  f"{f['shift_deg']:+.3f} deg" for f in shifted)
+                        or "one frame", "-", "diagnosis/diagnosis_lines.json",
+                        "records whose angle zero moved: a cause fixed in the reducer is fitted across them as if "
+                        "it had not (reported, not applied)" if shifted else ""))
+    shape = next((n for n in diag.get("notes", []) if n.startswith("gap shape:")), None)
+    if shape is not None:
+        rows.append(Row("gap shape (forward minus backward, against torque)", shape.split(": ", 1)[1].split(";")[0],
+                        "-", "diagnosis/diagnosis.json", shape.split("; ", 1)[1] if "; " in shape else ""))
     return rows
 
 

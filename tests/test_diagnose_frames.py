@@ -92,6 +92,7 @@ def test_a_group_recorded_in_a_shifted_angle_frame_is_found_and_reported(shift):
     moved = by["zero:z300"]
     # the 1800 N.m lines are twice the reference's: what is left after aligning counts as noise
     assert moved.reported and abs(moved.shift_deg - shift) <= max(3 * moved.sd_deg, 0.01)
+    assert moved.torques_Nm == (300.0,) and moved.to_json()["torques_Nm"] == [300.0]
     assert moved.mismatch_removed > 0.9
     assert not by["zero:z1800"].reported and abs(by["zero:z1800"].shift_deg) < 0.05
     note = frame_notes(recs, group_records(recs), shifts)

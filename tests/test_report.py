@@ -241,3 +241,19 @@ def test_the_sensitivity_section_shows_its_table_and_not_the_variants_own_pictur
     assert "made by other code" in build_report(case_dir).read_text()
     (sens / "sensitivity.json").write_text(json.dumps({"code_fingerprint": code_fingerprint()}))
     assert "made by other code" not in build_report(case_dir).read_text()
+
+
+def test_the_key_figures_say_which_records_sit_in_another_angle_frame_and_the_gap_shape():
+    from pipeline.report_summary import _record_reading_rows
+    lines = {"lines_by_direction": None, "angle_frames": [
+        {"group": "pair:a+b", "torques_Nm": [300.0], "shift_deg": 0.5133, "reported": True},
+        {"group": "pair:c+d", "torques_Nm": [1800.0], "shift_deg": -0.1, "reported": False}]}
+    diag = {"notes": ["gap shape: the residual half-gap departs by -2.6/+1.8 arcsec at 0/300 N.m; the records' own "
+                      "half-gap departs by up to 0.21 arcsec"]}
+    rows = _record_reading_rows(lines, diag)
+    assert [r.value for r in rows] == ["300 N m records +0.513 deg",
+                                       "the residual half-gap departs by -2.6/+1.8 arcsec at 0/300 N.m"]
+    assert "reported, not applied" in rows[0].note and rows[1].note.startswith("the records' own")
+    one = _record_reading_rows({"lines_by_direction": None, "angle_frames": []}, {"notes": []})
+    assert [r.value for r in one] == ["one frame"]
+    assert _record_reading_rows(None, {"notes": []}) == []

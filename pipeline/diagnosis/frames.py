@@ -58,6 +58,7 @@ class FrameShift:
     dominant_order: int = 0             # the order that weighs most in the fit
     without_dominant_deg: float = 0.0   # the shift the other orders give alone
     without_dominant_sd_deg: float = float("inf")
+    torques_Nm: tuple[float, ...] = ()  # the group's |torque| levels
 
     @property
     def reported(self) -> bool:
@@ -66,7 +67,8 @@ class FrameShift:
                 <= max(AGREE * abs(self.shift_deg), SIGMAS * self.without_dominant_sd_deg))
 
     def to_json(self) -> dict:
-        return {"group": self.group, "reference": self.reference, "shift_deg": round(self.shift_deg, 4),
+        return {"group": self.group, "torques_Nm": list(self.torques_Nm), "reference": self.reference,
+                "shift_deg": round(self.shift_deg, 4),
                 "sd_deg": round(self.sd_deg, 4), "mismatch_removed": round(self.mismatch_removed, 3),
                 "orders": list(self.orders), "dominant_order": self.dominant_order,
                 "without_dominant_deg": round(self.without_dominant_deg, 4), "reported": self.reported}
@@ -123,7 +125,8 @@ def frame_shifts(case, records, groups, signals, max_order: int) -> tuple[FrameS
         top = int(np.argmax(k ** 2 * np.sum(np.abs(z_g) ** 2, axis=1)))
         rest = np.arange(len(k)) != top
         d_rest, sd_rest, _ = best_shift(k[rest], z_ref[rest], z_g[rest], half)
-        out.append(FrameShift(g, ref, d, sd, removed, orders, int(k[top]), d_rest, sd_rest))
+        levels = tuple(sorted({s.torque_Nm for s in splits if s.group == g}))
+        out.append(FrameShift(g, ref, d, sd, removed, orders, int(k[top]), d_rest, sd_rest, levels))
     return tuple(out)
 
 
