@@ -95,7 +95,7 @@ def test_a_group_recorded_in_a_shifted_angle_frame_is_found_and_reported(shift):
     assert moved.torques_Nm == (300.0,) and moved.to_json()["torques_Nm"] == [300.0]
     assert moved.mismatch_removed > 0.9
     assert not by["zero:z1800"].reported and abs(by["zero:z1800"].shift_deg) < 0.05
-    note = frame_notes(recs, group_records(recs), shifts)
+    note = frame_notes(shifts)
     assert len(note) == 1 and f"300 N.m records {shift:+.3f}"[:-1] in note[0] and "0 N.m records" in note[0]
 
 
@@ -111,7 +111,7 @@ def test_records_in_one_frame_report_no_shift_whatever_their_lines_do_with_torqu
             sig.append(_lines(r, lines) + rng.normal(0, 0.5, N))
     shifts = frame_shifts(CASE, recs, group_records(recs), sig, 400)
     assert len(shifts) == 3 and not any(s.reported for s in shifts)
-    assert frame_notes(recs, group_records(recs), shifts) == []
+    assert frame_notes(shifts) == []
 
 
 def test_best_shift_is_exact_on_noise_free_phasors_and_the_orders_are_the_mechanism_s():

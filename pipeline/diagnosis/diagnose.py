@@ -216,7 +216,7 @@ def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_ent
                          explained=extension is not None)
     notes += gap_shape_notes(records, groups, meas, sim0, after if after is not None else before, noise)
     shifts = frame_shifts(case, records, groups, before, max_order)
-    notes += frame_notes(records, groups, shifts)
+    notes += frame_notes(shifts)
     line_dirs = _line_directions(case, records, groups, before, after, noise)
     return Diagnosis(findings[0].cause if findings else None, tuple(findings), rms(before),
                      max(float(np.ptp(r)) for r in before), extension, tuple(records), tuple(groups),

@@ -74,10 +74,10 @@ def line_phasor(output_angle_deg, signal, order: int) -> complex:
     return complex(coef[0], coef[1])
 
 
-def direction_split(records, groups, signals, orders) -> tuple[DirectionSplit, ...]:
-    """Every order of `orders` at every torque level where one encoder-zero group holds a forward and
-    a backward record (the first of each, by the given order); records lacking a partner are skipped."""
-    out = []
+def direction_pairs(records, groups) -> list[tuple[int, int, float, str]]:
+    """(forward index, backward index, |torque|, group) for each forward record of an encoder-zero
+    group with a backward partner at its torque level (each record used once, in the given order)."""
+    pairs = []
     for g in dict.fromkeys(groups):
         idx = [k for k in range(len(records)) if groups[k] == g]
         used = set()
@@ -87,13 +87,18 @@ def direction_split(records, groups, signals, orders) -> tuple[DirectionSplit, .
             tq = abs(records[k].torque_Nm)
             partner = next((j for j in idx if j not in used and records[j].direction < 0
                             and abs(abs(records[j].torque_Nm) - tq) <= TORQUE_TOL_NM), None)
-            if partner is None:
-                continue
-            used.update((k, partner))
-            for order in orders:
-                out.append(DirectionSplit(int(order), float(tq), str(g),
-                                          line_phasor(records[k].output_angle_deg, signals[k], order),
-                                          line_phasor(records[partner].output_angle_deg, signals[partner], order)))
+            if partner is not None:
+                used.update((k, partner))
+                pairs.append((k, partner, float(tq), str(g)))
+    return pairs
+
+
+def direction_split(records, groups, signals, orders) -> tuple[DirectionSplit, ...]:
+    """Every order of `orders` at every torque level where one encoder-zero group holds a forward and
+    a backward record (direction_pairs); records lacking a partner are skipped."""
+    out = [DirectionSplit(int(order), tq, g, line_phasor(records[f].output_angle_deg, signals[f], order),
+                          line_phasor(records[b].output_angle_deg, signals[b], order))
+           for f, b, tq, g in direction_pairs(records, groups) for order in orders]
     return tuple(sorted(out, key=lambda s: (s.order, s.torque_Nm, s.group)))
 
 
@@ -111,7 +116,7 @@ def split_text(case, splits, order: int) -> str:
 
 
 def table(case, splits) -> list[dict]:
-    """diagnosis.json rows: one per order, its label and the split at each torque level."""
+    """diagnosis_lines.json rows: one per order, its label and the split at each torque level."""
     rows = []
     for order in sorted({s.order for s in splits}):
         mine = [s for s in splits if s.order == order]

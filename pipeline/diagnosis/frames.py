@@ -20,7 +20,7 @@ one that weighs most (k^2 |z|^2): their own shift within AGREE of it or SIGMAS o
 line whose phase moves with torque, a load zone moving, pulls the weighted optimum to itself and
 would otherwise pass). A measurement of the records, not applied
 to the fit (the fit would then also need to know which lines follow the output encoder's own frame;
-README "Angle frames" gives what aligning the real records does).
+README "Lines by direction and the records' angle frames" gives what aligning the real records does).
 """
 from __future__ import annotations
 
@@ -59,6 +59,7 @@ class FrameShift:
     without_dominant_deg: float = 0.0   # the shift the other orders give alone
     without_dominant_sd_deg: float = float("inf")
     torques_Nm: tuple[float, ...] = ()  # the group's |torque| levels
+    reference_torques_Nm: tuple[float, ...] = ()
 
     @property
     def reported(self) -> bool:
@@ -116,6 +117,9 @@ def frame_shifts(case, records, groups, signals, max_order: int) -> tuple[FrameS
         return ()
     ref = have[0]
     z_ref = _phasors(splits, ref, orders)
+
+    def levels(g):
+        return tuple(sorted({s.torque_Nm for s in splits if s.group == g}))
     k = np.array(orders, float)
     half = 180.0 / case.cycloid.zc
     out = []
@@ -125,26 +129,23 @@ def frame_shifts(case, records, groups, signals, max_order: int) -> tuple[FrameS
         top = int(np.argmax(k ** 2 * np.sum(np.abs(z_g) ** 2, axis=1)))
         rest = np.arange(len(k)) != top
         d_rest, sd_rest, _ = best_shift(k[rest], z_ref[rest], z_g[rest], half)
-        levels = tuple(sorted({s.torque_Nm for s in splits if s.group == g}))
-        out.append(FrameShift(g, ref, d, sd, removed, orders, int(k[top]), d_rest, sd_rest, levels))
+        out.append(FrameShift(g, ref, d, sd, removed, orders, int(k[top]), d_rest, sd_rest, levels(g), levels(ref)))
     return tuple(out)
 
 
-def frame_notes(records, groups, shifts) -> list[str]:
+def frame_notes(shifts) -> list[str]:
     """The diagnosis note for the reported shifts (one sentence), or none."""
     shown = [s for s in shifts if s.reported]
     if not shown:
         return []
 
-    def level(g):
-        return "/".join(sorted({f"{abs(records[k].torque_Nm):g}" for k in range(len(records)) if groups[k] == g},
-                               key=float))
-    ref = shown[0].reference
-    parts = ", ".join(f"the {level(s.group)} N.m records {s.shift_deg:+.3f} +- {1.96 * s.sd_deg:.3f} deg "
+    def level(torques):
+        return "/".join(f"{t:g}" for t in torques)
+    parts = ", ".join(f"the {level(s.torques_Nm)} N.m records {s.shift_deg:+.3f} +- {1.96 * s.sd_deg:.3f} deg "
                       f"(removing {s.mismatch_removed:.0%} of their phasor mismatch; the lines but "
                       f"{s.dominant_order}x alone: {s.without_dominant_deg:+.3f} deg)" for s in shown)
     return [f"angle frames: the mechanism's lines (orders {', '.join(f'{k}x' for k in shown[0].orders)}) "
-            f"place {parts} from the {level(ref)} N.m records: they do not share one output-angle zero "
-            f"(a bench that zeroes each condition on its own can move it); a cause fixed in the reducer "
-            f"(pin ring, housing, tilt, cranks) is fitted across them as if they did, so its lines are "
+            f"place {parts} from the {level(shown[0].reference_torques_Nm)} N.m records: they do not share one "
+            f"output-angle zero (a bench that zeroes each condition on its own can move it); a cause fixed in the "
+            f"reducer (pin ring, housing, tilt, cranks) is fitted across them as if they did, so its lines are "
             f"explained only in part; diagnosis_lines.json angle_frames"]

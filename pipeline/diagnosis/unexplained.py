@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.diagnosis.causes.base import TORQUE_TOL_NM, torque_levels, trend
-from pipeline.diagnosis.directions import direction_split, split_text
+from pipeline.diagnosis.directions import direction_pairs, direction_split, split_text
 from pipeline.diagnosis.orders import label_order, spectrum_of
 from pipeline.diagnosis.significance import test_lines
 from pipeline.diagnosis.zeros import rms
@@ -89,17 +89,11 @@ def _lines_text(case, records, groups, residuals, noise: float) -> str:
 
 
 def half_gaps(records, groups, signals) -> dict[float, float]:
-    """|torque| -> (forward mean - backward mean) / 2 of the first pair of one encoder zero there."""
+    """|torque| -> (forward mean - backward mean) / 2 of the first pair (direction_pairs) at that level."""
     out: dict[float, float] = {}
-    for g in dict.fromkeys(groups):
-        idx = [k for k in range(len(records)) if groups[k] == g]
-        fw = [k for k in idx if records[k].direction > 0]
-        for k in fw:
-            t = abs(records[k].torque_Nm)
-            bw = next((j for j in idx if records[j].direction < 0
-                       and abs(abs(records[j].torque_Nm) - t) <= TORQUE_TOL_NM), None)
-            if bw is not None and not any(abs(t - lv) <= TORQUE_TOL_NM for lv in out):
-                out[t] = 0.5 * (float(np.mean(signals[k])) - float(np.mean(signals[bw])))
+    for f, b, t, _ in direction_pairs(records, groups):
+        if not any(abs(t - lv) <= TORQUE_TOL_NM for lv in out):
+            out[t] = 0.5 * (float(np.mean(signals[f])) - float(np.mean(signals[b])))
     return dict(sorted(out.items()))
 
 
