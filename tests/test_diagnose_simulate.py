@@ -209,3 +209,41 @@ def test_a_record_s_condition_puts_the_carrier_drag_on_the_mechanism_not_on_the_
         assert np.allclose(bare, [solve_static(model, a, T, None, d).te_arcsec for a in d * ang], atol=1e-6)
     with pytest.raises(Exception, match="oil temperature"):
         sim.quasi_static_te(CASE, stiff, ang, 100.0, 1, sim.Condition(1500.0, 500.0))
+
+
+def test_library_tangents_predict_a_column_s_first_solves_and_change_no_equilibrium():
+    """simulate.seed_tangents: before a fit has taken a Jacobian column, its predictor on each grid is
+    coef x (the library's unit model's states - the base's), both as solved in the run; a column
+    solved from it (tangent_seeds) lands on the cold solve's equilibria to the Newton tolerance
+    (1e-6 arcsec). A predictor the fit already has is kept; outside a run nothing is set."""
+    from support import stiffness_for_tests
+    from pipeline.diagnosis.causes.backlash import CAUSE as backlash
+    stiff = stiffness_for_tests(CASE)
+    rec = bench_records(toy_te, CASE, TOY_STIFF, [], seed=0, torque_fractions=(0.3,))[0]
+    n = 64
+    unit = backlash.apply(CASE, stiff, np.array([backlash.unit_size]))
+    column = backlash.apply(CASE, stiff, np.array([0.3 * backlash.unit_size]))
+    tag = ("backlash", 0)
+    assert sim.seed_tangents(CASE, stiff, [rec], n, {tag: [(0.3, unit)]}) == 0     # no run: nothing kept
+    cold = sim.simulate_record(sim.quasi_static_te, *column, rec, n)
+    sim._CARRIERS.clear()
+    with sim.seeding():
+        sim.simulate_record(sim.quasi_static_te, CASE, stiff, rec, n)
+        sim.simulate_record(sim.quasi_static_te, *unit, rec, n)
+        assert sim.seed_tangents(CASE, stiff, [rec], n, {tag: [(0.3, unit)]}) == 1
+        d, cond = rec.direction, sim.record_condition(rec)
+        ang = sim.periodic_grid_deg(CASE, n, d)
+        T = np.full(ang.shape, sim.mechanism_torque(CASE, np.float64(rec.torque_Nm), d, cond))
+        kb = sim._carrier_key(CASE, stiff, ang, T, d, cond)[0]
+        ku = sim._carrier_key(*unit, ang, T, d, cond)[0]
+        step = sim._STEPS[(tag, kb[2:])]
+        np.testing.assert_allclose(step, 0.3 * (sim._STATES[ku] - sim._STATES[kb]))
+        assert np.any(step != 0.0)
+        assert sim.seed_tangents(CASE, stiff, [rec], n, {tag: [(0.7, unit)]}) == 0   # kept, not replaced
+        with sim.tangent_seeds(CASE, stiff, tag):
+            kc = sim._carrier_key(*column, ang, T, d, cond)[0]
+            start, _ = sim._seeds_for(kc)
+            np.testing.assert_allclose(start, sim._STATES[kb] + step)
+            warm = sim.simulate_record(sim.quasi_static_te, *column, rec, n)
+    sim._CARRIERS.clear()
+    assert np.max(np.abs(warm - cold)) < 1e-6

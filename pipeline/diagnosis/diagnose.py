@@ -41,7 +41,8 @@ from pipeline.diagnosis.orders import spectrum_of
 from pipeline.diagnosis.signatures import SignatureSummary, signature_columns, summarise
 from pipeline.diagnosis.significance import Line, noise_floor_arcsec, test_lines
 from pipeline.diagnosis.simulate import (TEModel, default_points_per_rev, max_order as order_limit, process_pool,
-                                         prefetch_models, quasi_static_te, seeding, simulate_records)
+                                         prefetch_models, quasi_static_te, seed_tangents, seeding,
+                                         simulate_records)
 from pipeline.diagnosis.unexplained import gap_shape_notes, strongest_lines, torque_sign_notes, unexplained
 from pipeline.diagnosis.zeros import group_records, offset_columns, remove_offsets, rms
 
@@ -201,7 +202,9 @@ def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_ent
         # the fit's re-taken Jacobian columns, one batch on the workers (no pool: nothing to do)
         def prefetch(models, idx):
             prefetch_models(models, [records[k] for k in idx], points_per_rev, pool)
-        run = Run(case, stiffness, records, groups, meas, te_of, te_model, lib.fmaps, lib.w, noise, prefetch)
+        def seed(columns, idx):
+            seed_tangents(case, stiffness, [records[k] for k in idx], points_per_rev, columns)
+        run = Run(case, stiffness, records, groups, meas, te_of, te_model, lib.fmaps, lib.w, noise, prefetch, seed)
         extension, after, ext_notes, dropped = extend(run, [by_id[s.cause] for s in result.selected],
                                                       {c.cause: c for c in lib.fit_cols}, fit_idx, hold_idx,
                                                       max_nfev)

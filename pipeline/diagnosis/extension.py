@@ -81,6 +81,7 @@ class Run:
     w: np.ndarray
     noise_arcsec: float              # the records' noise floor (effect sizes below it: dropped)
     prefetch: object = None          # (models [(case, stiffness, tangent)], idx) -> None: solve their grids as a batch
+    seed: object = None              # (columns {tag: [(coef, (case, stiffness))]}, idx) -> None: first-iterate predictors
 
 
 def extend(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int):
@@ -217,6 +218,8 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
     bounded = bool(np.any(np.isfinite(lo) | np.isfinite(hi)))
     note = ""
     prefetch = (lambda models: run.prefetch(models, fit_idx)) if run.prefetch is not None else None
+    if run.seed is not None and spans:
+        run.seed(_library_tangents(run.case, run.stiffness, chosen, cols, spans, tag), fit_idx)
     jacobian = _jacobian(fun, J, spans, model_at, tag, prefetch)
     budget = _Budget(max_nfev, fun)
     try:
@@ -404,6 +407,26 @@ def _spans(chosen, cols, keep) -> list[tuple[int, int, float]]:
             spans.append((k, q, REFRESH_STEP * c.unit_size))
         k += q
     return spans
+
+
+def _library_tangents(case, stiffness, chosen, cols, spans, tag) -> dict:
+    """{tag: [(coef, unit model)]} of each re-taken column: its step h V[:, i] in the cause's
+    parameters composed of the library's unit solves (p = unit e_j, signatures.py), coef = h / unit
+    V[j, i]: the column's state change predicted before the fit has taken it once (a start for its
+    first solves, simulate.seed_tangents; the later iterates use the change the column last made)."""
+    out = {}
+    by_id = {c.id: c for c in chosen}
+    for k0, q, h in spans:
+        for j in range(k0, k0 + q):
+            cid, i = tag[j]
+            c, V = by_id[cid], cols[cid].V
+            terms = []
+            for jj in np.flatnonzero(np.abs(V[:, i]) > 1e-12):
+                p = np.zeros(V.shape[0])
+                p[jj] = c.unit_size
+                terms.append((h / c.unit_size * float(V[jj, i]), c.apply(case, stiffness, p)))
+            out[tag[j]] = terms
+    return out
 
 
 def _scaled(x0, spans, f):

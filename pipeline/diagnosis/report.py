@@ -311,17 +311,16 @@ def _layout(ax, items, seq) -> dict:
         best = None
         for y in np.arange(lo, hi + 1e-9, step):
             y0 = float(ax.transAxes.transform((0.0, y))[1])
-            if y0 + h > frame.y1:
-                break
+            if y0 + h > frame.y1 or (best is not None and (y - lo) / _ROW >= best[0]):
+                break            # the cost only grows from here (pruned: the same slot as the full search)
             for s in sorted(np.arange(-1.5, 1.51, 0.125), key=abs):
                 xc = min(max(xp + float(s) * w, frame.x0 + w / 2), frame.x1 - w / 2)
                 box = (xc - w / 2, y0, xc + w / 2, y0 + h)
-                if any(_overlap(box, b) for b, _ in placed):
-                    continue
                 leader = ((min(max(xp, box[0] + 4.0), box[2] - 4.0), y0), (xp, yp))
-                behind = sum(_hits(leader, b) + _hits(l, box) + _crosses(leader, l) for b, l in placed)
-                cost = (100.0 * behind + (y - lo) / _ROW + abs(leader[0][0] - xp) / _SLANT_PX
-                        + 0.3 * abs(xc - xp) / w)
+                cost = (y - lo) / _ROW + abs(leader[0][0] - xp) / _SLANT_PX + 0.3 * abs(xc - xp) / w
+                if (best is not None and cost >= best[0]) or any(_overlap(box, b) for b, _ in placed):
+                    continue     # no cheaper than the best even with nothing behind, or overlapping
+                cost += 100.0 * sum(_hits(leader, b) + _hits(l, box) + _crosses(leader, l) for b, l in placed)
                 if best is None or cost < best[0]:
                     best = (cost, box, leader, y)
         slots[i] = best

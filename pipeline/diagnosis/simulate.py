@@ -315,6 +315,41 @@ def _seeded(key, solved) -> np.ndarray:
     return carrier
 
 
+def seed_tangents(case, stiffness, records, n: int, columns: dict) -> int:
+    """Predictors for Jacobian columns not yet taken in this seeding scope (a fit's first iterate):
+    column tag's state change on each steady record's grid as the sum over its terms of coef x
+    (states of that term's model - states of (case, stiffness)), where the library's unit models
+    and the base are still held (_STATES); `columns`: {tag: [(coef, (case_j, stiffness_j)), ...]}.
+    Only a start: the same equilibria to the Newton tolerance (tangent_seeds). Returns the count of
+    (column, grid) predictors set."""
+    if _SEEDS is None:
+        return 0
+    count = 0
+    for r in records:
+        if not _steady(case, r):
+            continue
+        d, cond = r.direction, record_condition(r)
+        ang = periodic_grid_deg(case, n, d)
+        T = np.full(ang.shape, mechanism_torque(case, np.float64(r.torque_Nm), d, cond))
+        key, _, _ = _carrier_key(case, stiffness, ang, T, d, cond)
+        base = _STATES.get(key)
+        if base is None:
+            continue
+        for tag, terms in columns.items():
+            if (tag, key[2:]) in _STEPS:
+                continue
+            step = np.zeros_like(base)
+            for coef, (cj, sj) in terms:
+                Q = _STATES.get(_carrier_key(cj, sj, ang, T, d, cond)[0])
+                if Q is None or Q.shape != base.shape:
+                    break
+                step += coef * (Q - base)
+            else:
+                _STEPS[(tag, key[2:])] = step
+                count += 1
+    return count
+
+
 def _grid_jobs(case, stiffness, records, n: int, jobs: dict) -> None:
     """Add to `jobs` the steady records' grids of (case, stiffness) missing from the carrier cache,
     each with its seeds as the current seed scope gives them (_seeds_for)."""
