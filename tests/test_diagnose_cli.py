@@ -159,3 +159,16 @@ def test_the_extension_names_its_fitted_and_held_out_records():
     assert set(d.extension.held_out) == {recs[0].name, recs[1].name}
     assert not set(d.extension.fitted) & set(d.extension.held_out) and len(d.extension.fitted) == 4
     assert d.extension.holdout_gain > 0.9
+
+
+def test_the_phase_timeline_script_refuses_missing_records(tmp_path, capsys):
+    """bench/diagnose_phases.py names the first missing record and exits 2 before wrapping anything."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("diagnose_phases", Path(__file__).parents[1] / "bench" / "diagnose_phases.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    import pipeline.diagnosis.extension as X
+    before = X._fit
+    assert mod.main(["--measured", str(tmp_path), "--out", str(tmp_path / "out")]) == 2
+    assert "rv160n_1800rpm_0Nm_25C_bw.csv not found" in capsys.readouterr().err
+    assert X._fit is before
