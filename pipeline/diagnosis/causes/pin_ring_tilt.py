@@ -58,8 +58,8 @@ class PinRingTilt(Cause):
                 f"a pin ring tilted against the carrier's axis (orders {list(ev.summary.orders)[:3]}): its centre "
                 f"off oppositely at the two disc planes, each disc turns by the shift across its eccentric over "
                 f"E zc, and the two discs' {zc}x lines add; a ring off-centre alike at both planes "
-                f"(pin_ring_pattern m = 1) cancels between them. A {zc}x line that grows with torque is not "
-                f"this cause's (its line is independent of torque){ev.alternatives}.")
+                f"(pin_ring_pattern m = 1) nearly cancels between them (a tenth of the size). A {zc}x line "
+                f"that grows with torque is not this cause's (its line is independent of torque){ev.alternatives}.")
 
     def draw(self, rng, case):
         return polar_draw(rng, (0.8, 3.0), "pin_ring_tilt")
