@@ -164,7 +164,8 @@ def test_the_extension_names_its_fitted_and_held_out_records():
 def test_the_phase_timeline_script_refuses_missing_records(tmp_path, capsys):
     """bench/diagnose_phases.py names the first missing record and exits 2 before wrapping anything."""
     import importlib.util
-    spec = importlib.util.spec_from_file_location("diagnose_phases", Path(__file__).parents[1] / "bench" / "diagnose_phases.py")
+    script = Path(__file__).parents[1] / "bench" / "diagnose_phases.py"
+    spec = importlib.util.spec_from_file_location("diagnose_phases", script)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     import pipeline.diagnosis.extension as X

@@ -325,13 +325,7 @@ def seed_tangents(case, stiffness, records, n: int, columns: dict) -> int:
     if _SEEDS is None:
         return 0
     count = 0
-    for r in records:
-        if not _steady(case, r):
-            continue
-        d, cond = r.direction, record_condition(r)
-        ang = periodic_grid_deg(case, n, d)
-        T = np.full(ang.shape, mechanism_torque(case, np.float64(r.torque_Nm), d, cond))
-        key, _, _ = _carrier_key(case, stiffness, ang, T, d, cond)
+    for key, _, ang, T, d, cond in _steady_grids(case, stiffness, records, n):
         base = _STATES.get(key)
         if base is None:
             continue
@@ -350,17 +344,23 @@ def seed_tangents(case, stiffness, records, n: int, columns: dict) -> int:
     return count
 
 
-def _grid_jobs(case, stiffness, records, n: int, jobs: dict) -> None:
-    """Add to `jobs` the steady records' grids of (case, stiffness) missing from the carrier cache,
-    each with its seeds as the current seed scope gives them (_seeds_for)."""
+def _steady_grids(case, stiffness, records, n: int):
+    """(carrier key, mechanics, grid angles, torques, direction, condition) of each steady record's
+    grid of (case, stiffness): what quasi_static_te keys its solve by."""
     for r in records:
         if not _steady(case, r):
             continue
-        d = r.direction
+        d, cond = r.direction, record_condition(r)
         ang = periodic_grid_deg(case, n, d)
-        cond = record_condition(r)
         T = np.full(ang.shape, mechanism_torque(case, np.float64(r.torque_Nm), d, cond))
         key, mech, _ = _carrier_key(case, stiffness, ang, T, d, cond)
+        yield key, mech, ang, T, d, cond
+
+
+def _grid_jobs(case, stiffness, records, n: int, jobs: dict) -> None:
+    """Add to `jobs` the steady records' grids of (case, stiffness) missing from the carrier cache,
+    each with its seeds as the current seed scope gives them (_seeds_for)."""
+    for key, mech, ang, T, d, _ in _steady_grids(case, stiffness, records, n):
         if key not in _CARRIERS and key not in jobs:
             jobs[key] = (mech, stiffness, ang, T, d, _seeds_for(key))
 

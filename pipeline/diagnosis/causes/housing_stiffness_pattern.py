@@ -18,8 +18,9 @@ the pattern's phase and size (`dc_even`, as LobeCause). By direction (RV-160N FE
 800 / 1800 N m, signed torque): m = 4's 156x reverses with the motion (1.4 / 1.8 / 2.3 arcsec), m = 2's
 78x is common to both (2.6 / 5.2 / 9.0). Odd m: m = 3 nearly cancels between the discs 180 deg apart
 (0.2 arcsec), m = 1 does not (39x, 0.56 / 1.36 / 2.79 arcsec, both common and reversing); not in
-`harmonics` (README: its share of the real records' residual). The atlas (dynamics.signatures.groups) puts each lobe in a group of its own: the same orders
-as pin_ring_pattern (flat or falling with torque), told apart by the growth with torque.
+`harmonics` (README: its share of the real records' residual). The atlas (dynamics.signatures.groups)
+puts each lobe in a group of its own: the same orders as pin_ring_pattern (flat or falling with
+torque), told apart by the growth with torque.
 Bounds: +-10 um/kN per component (a seat up to 2 x 14 um/kN softer at the crest of one lobe).
 ASSUMED: a housing wall down to ~6 mm between supports ~40 mm apart, read as a beam in bending
 under one seat's load (F L^3 / 48 E I with b = 40 mm: ~9 um/kN), bounds what a built housing's
