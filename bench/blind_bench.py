@@ -25,6 +25,12 @@ Sets (amplitudes and phases drawn from --seed; theta the output angle, T_top the
   compliance4   the record's own wind-up (its mean TE less the no-load run's, same direction)
                 times 3: a reducer four times softer than the model -> torsional_stiffness
   clean         nothing -> no cause
+  housing4_structure  (only with --sets naming it) the 4-lobe housing pattern hidden in the
+                structure instead of the signal: `simulate` runs on a copy of the case with
+                `[errors] pin_stiffness_lobes = [[4, a, phase]]`, a in [0.4, 0.8] (each pin's support
+                law times 1 + a cos(4 theta_k - phase)), its own geometry, mesh and FE stages (the
+                fingerprint refuses the original's stiffness), nothing added to the encoder; the
+                diagnosis runs on the case as given -> housing_stiffness_pattern
 Records: torques 0, 0.3, 0.6, 1.0 x rated (forward and backward, each pair one encoder zero with
 a random offset), input speed --speed-rpm, the steady part of the run (after the load ramp) over
 one output revolution; `# input_speed_rpm` and `# oil_temperature_C: 25` comments.
@@ -51,10 +57,11 @@ LOAD_SETTLED_S = 2.2          # paper 001's speed ramp ends at 1 s, the load ram
 NOISE_ARCSEC = 0.3
 ENCODER_BITS = 23
 SETS = ("housing156", "crank40", "coaxiality", "encoder500", "pinring2", "compliance4", "clean", "tilt39")
+STRUCTURE_SETS = ("housing4_structure",)     # hidden in the case (own FE and simulate runs), not in the signal
 EXPECTED = {"housing156": "housing_stiffness_pattern", "crank40": "crank_eccentricity_error",
             "coaxiality": "output_coaxiality", "encoder500": "output_coaxiality",
             "pinring2": "pin_ring_pattern", "compliance4": "torsional_stiffness", "clean": None,
-            "tilt39": "pin_ring_tilt"}
+            "tilt39": "pin_ring_tilt", "housing4_structure": "housing_stiffness_pattern"}
 MIN_GAIN = 0.6
 
 
@@ -115,6 +122,32 @@ def clean_runs(args, nums, out: Path) -> dict:
     return runs
 
 
+def structure_runs(args, nums, rng, folder: Path) -> tuple[dict, dict]:
+    """The housing4_structure set's runs: a copy of the case with a 4-lobe pin support stiffness
+    pattern, its own geometry, mesh and FE stages, then `simulate` as for the clean runs; (runs, truth)."""
+    import re
+    a, phase = rng.uniform(0.4, 0.8), rng.uniform(-180.0, 180.0)
+    folder.mkdir(parents=True, exist_ok=True)
+    text = re.sub(r'^name\s*=.*$', f'name = "{nums["name"]}-h4"', args.case.read_text(), count=1, flags=re.M)
+    text = re.sub(r"^\[errors\].*$", lambda m: m.group(0) + f"\npin_stiffness_lobes = [[4, {a:.6f}, {phase:.6f}]]",
+                  text, count=1, flags=re.M)
+    case = folder / "case.toml"
+    if not case.exists() or case.read_text() != text:
+        case.write_text(text)
+    build = folder / "build"
+    stiffness = build / "fem" / "stiffness.json"
+    if not stiffness.exists():
+        for cmd in (["geometry", "--case", str(case), "--out", str(build / "geometry")],
+                    ["mesh", "--case", str(case), "--out", str(build / "mesh")],
+                    ["fem", "--case", str(case), "--mesh", str(build / "mesh"), "--out", str(build / "fem")]):
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "pipeline", *cmd, "--quiet"], check=True, cwd=ROOT)
+            print(f"blind: {cmd[0]} of the structure case in {time.perf_counter() - t0:.0f} s", flush=True)
+    copy = argparse.Namespace(**{**vars(args), "case": case, "stiffness": stiffness})
+    return clean_runs(copy, nums, folder / "runs"), {"set": "housing4_structure", "order": 4 * nums["zc"],
+                                                     "pin_stiffness_lobes": [4, a, phase]}
+
+
 def te_of(cols, ratio) -> np.ndarray:
     return (cols["output_angle_deg"] - cols["input_angle_deg"] / ratio) * ARCSEC_PER_DEG
 
@@ -167,8 +200,12 @@ def hidden(name: str, rng, nums, runs) -> tuple[dict, dict]:
 
 
 def make_set(name: str, args, nums, runs, folder: Path) -> tuple[list[Path], dict]:
-    rng = np.random.default_rng([args.seed, SETS.index(name)])
-    added, truth = hidden(name, rng, nums, runs)
+    rng = np.random.default_rng([args.seed, (SETS + STRUCTURE_SETS).index(name)])
+    if name in STRUCTURE_SETS:
+        runs, truth = structure_runs(args, nums, rng, folder.parent / "structure")
+        added = {k: 0.0 * c["time_s"] for k, c in runs.items()}
+    else:
+        added, truth = hidden(name, rng, nums, runs)
     folder.mkdir(parents=True, exist_ok=True)
     q = 360.0 / 2 ** ENCODER_BITS
     paths = []
@@ -223,9 +260,10 @@ def main() -> int:
     ap.add_argument("--sets", default=",".join(SETS))
     args = ap.parse_args()
     nums = case_numbers(args.case)
-    runs = clean_runs(args, nums, args.out / "clean")
+    names = args.sets.split(",")
+    runs = clean_runs(args, nums, args.out / "clean") if set(names) - set(STRUCTURE_SETS) else {}
     rows = []
-    for name in args.sets.split(","):
+    for name in names:
         paths, truth = make_set(name, args, nums, runs, args.out / name / "records")
         d, wall = diagnose(args, paths, args.out / name / "diagnosis")
         page = (args.out / name / "diagnosis" / "index.html")
