@@ -44,6 +44,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import subprocess
 import sys
 import time
@@ -125,7 +126,6 @@ def clean_runs(args, nums, out: Path) -> dict:
 def structure_runs(args, nums, rng, folder: Path) -> tuple[dict, dict]:
     """The housing4_structure set's runs: a copy of the case with a 4-lobe pin support stiffness
     pattern, its own geometry, mesh and FE stages, then `simulate` as for the clean runs; (runs, truth)."""
-    import re
     a, phase = rng.uniform(0.4, 0.8), rng.uniform(-180.0, 180.0)
     folder.mkdir(parents=True, exist_ok=True)
     text = re.sub(r'^name\s*=.*$', f'name = "{nums["name"]}-h4"', args.case.read_text(), count=1, flags=re.M)
