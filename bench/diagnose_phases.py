@@ -60,6 +60,23 @@ def _timed_jacobian(t0, log):
     X._jacobian = make
 
 
+def _timed_steps(t0, log):
+    """Log each accepted step of the fits (the solver's callback): evaluations so far, cost, whether
+    the step counts as significant past the budget (extension._Budget)."""
+    inner = X._Budget.callback
+
+    def callback(self, intermediate_result):
+        prev = self.cost
+        try:
+            inner(self, intermediate_result)
+        finally:
+            r = intermediate_result
+            drop = "" if prev is None else f", drop {(prev - float(r.cost)) / prev:.2e} of the cost"
+            log(f"  step at {time.perf_counter() - t0:.1f} s: {r.nfev} evaluations, cost {float(r.cost):.6g}"
+                f"{drop}, significant {self.significant}")
+    X._Budget.callback = callback
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--measured", default=str(ROOT.parent / "shared" / "measured"))
@@ -81,6 +98,7 @@ def main(argv=None) -> int:
         for name in names:
             _timed(mod, name, t0, log)
     _timed_jacobian(t0, log)
+    _timed_steps(t0, log)
     from pipeline.cli import main as cli
     rc = cli(["diagnose", "--case", str(ROOT / "cases" / "rv160n-81.toml"),
               "--stiffness", str(ROOT / "build" / "rv160n-81" / "fem" / "stiffness.json"),

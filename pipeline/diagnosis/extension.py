@@ -213,11 +213,12 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
         ps_w, off_w = warm
         z_w = [cols[c.id].V.T @ ps_w[c.id] if c.id in ps_w else np.zeros(cols[c.id].V.shape[1]) for c in chosen]
         starts.append(_project(np.r_[np.concatenate(z_w), off_w], chosen, cols, lims, lo, hi, nz))
+    prefetch = (lambda models: run.prefetch(models, fit_idx)) if run.prefetch is not None else None
     if len(starts) > 1:   # a threshold or nonlinear response (a coarse scan of its size), or a refit:
+        _prefetch_valid(prefetch, [lambda x=x: model_at(x) for x in starts])
         x0 = min(starts, key=lambda x: _cost(fun, x))   # start from the best candidate by cost
     bounded = bool(np.any(np.isfinite(lo) | np.isfinite(hi)))
     note = ""
-    prefetch = (lambda models: run.prefetch(models, fit_idx)) if run.prefetch is not None else None
     if run.seed is not None and spans:
         run.seed(_library_tangents(run.case, run.stiffness, chosen, cols, spans, tag), fit_idx)
     jacobian = _jacobian(fun, J, spans, model_at, tag, prefetch)
@@ -276,13 +277,16 @@ def _verdicts(run: Run, chosen, ps, wanted, half_ci, lims, fit_idx, sims0, sims_
     fitted = [sims_after[k] for k in fit_idx]
     before = [run.meas[k] - s for k, s in zip(fit_idx, sims0)]
     after = [run.meas[k] - s for k, s in zip(fit_idx, fitted)]
+    without_ps = [[q if i != j else np.zeros_like(q) for i, q in enumerate(ps)] for j in range(len(chosen))]
+    if run.prefetch is not None:
+        _prefetch_valid(lambda models: run.prefetch(models, fit_idx),
+                        [lambda o=o: _apply(run.case, run.stiffness, chosen, o) for o in without_ps])
     for j, (c, p, pw, h, (lo, hi)) in enumerate(zip(chosen, ps, wanted, half_ci, lims)):
         names = [q.name for q in c.params(run.case)]
         vague = [f"{n} +- {v:.3g}" for n, v, a, z in zip(names, h, lo, hi) if 2.0 * v > z - a]
         on = [f"{n} = {w:.4g} (fit {v:.4g}, on or past its bound {b:g})" for n, v, w, a, z in zip(names, p, pw, lo, hi)
               for b in (a, z) if abs(v - b) <= AT_BOUND * (z - a) or (w - b) * (b - 0.5 * (a + z)) > 0]
-        others = [q if i != j else np.zeros_like(q) for i, q in enumerate(ps)]
-        without = run.te_of(*_apply(run.case, run.stiffness, chosen, others), fit_idx)
+        without = run.te_of(*_apply(run.case, run.stiffness, chosen, without_ps[j]), fit_idx)
         effect_ts = [a - b for a, b in zip(fitted, without)]
         effect = rms(remove_offsets(effect_ts, groups))
         share = claimed_share(run, fit_idx, effect_ts, before, after)
@@ -365,6 +369,22 @@ class _Budget:
         self.significant = bool(stats.f.sf(F, q, dof) < CONTINUE_P)
         if r.nfev >= self.max_nfev and not self.significant:
             raise StopIteration
+
+
+def _prefetch_valid(prefetch, makers) -> None:
+    """Solve the models `makers` build (each a () -> (case, stiffness)) as one batch on the workers
+    before they are evaluated one by one (the fit's start candidates, the verdicts' models without
+    each cause): the same equilibria to the Newton tolerance, the workers kept busy. A maker the
+    geometry refuses (CaseError, a ValueError) is left to its caller, which says why."""
+    if prefetch is None:
+        return
+    models = []
+    for make in makers:
+        try:
+            models.append((*make(), None))
+        except ValueError:
+            continue
+    prefetch(models)
 
 
 def _cost(fun, x) -> float:
