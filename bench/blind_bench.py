@@ -25,12 +25,17 @@ Sets (amplitudes and phases drawn from --seed; theta the output angle, T_top the
   compliance4   the record's own wind-up (its mean TE less the no-load run's, same direction)
                 times 3: a reducer four times softer than the model -> torsional_stiffness
   clean         nothing -> no cause
-  housing4_structure  (only with --sets naming it) the 4-lobe housing pattern hidden in the
-                structure instead of the signal: `simulate` runs on a copy of the case with
-                `[errors] pin_stiffness_lobes = [[4, a, phase]]`, a in [0.4, 0.8] (each pin's support
-                law times 1 + a cos(4 theta_k - phase)), its own geometry, mesh and FE stages (the
-                fingerprint refuses the original's stiffness), nothing added to the encoder; the
-                diagnosis runs on the case as given -> housing_stiffness_pattern
+Structure sets (only with --sets naming them): the effect hidden in the reducer instead of the
+signal. `simulate` runs on a copy of the case with the set's `[errors]` lines, with its own geometry,
+mesh and FE stages (the fingerprint refuses the original's stiffness), nothing added to the encoder
+but noise, zero and quantisation; the diagnosis runs on the case as given. Sizes from the causes'
+stated virtual-bench ranges (their docstrings), phases uniform:
+  housing4_structure  pin_stiffness_lobes = [[4, a, phase]], a in [0.4, 0.8] (each pin's support
+                law times 1 + a cos(4 theta_k - phase)) -> housing_stiffness_pattern
+  pinring2_structure  pin_radial_lobes = [[2, a, phase]], a in [3, 8] um -> pin_ring_pattern
+  tilt39_structure    pin_ring_tilt_um = t in [0.8, 3] um at any phase -> pin_ring_tilt
+  crank40_structure   eccentric_error_um: disc 1's eccentric on one crank (uniform) off by e,
+                |e| in [4, 10] um, either sign -> crank_eccentricity_error
 Records: torques 0, 0.3, 0.6, 1.0 x rated (forward and backward, each pair one encoder zero with
 a random offset), input speed --speed-rpm, the steady part of the run (after the load ramp) over
 one output revolution; `# input_speed_rpm` and `# oil_temperature_C: 25` comments.
@@ -58,11 +63,14 @@ LOAD_SETTLED_S = 2.2          # paper 001's speed ramp ends at 1 s, the load ram
 NOISE_ARCSEC = 0.3
 ENCODER_BITS = 23
 SETS = ("housing156", "crank40", "coaxiality", "encoder500", "pinring2", "compliance4", "clean", "tilt39")
-STRUCTURE_SETS = ("housing4_structure",)     # hidden in the case (own FE and simulate runs), not in the signal
+# hidden in the case (own FE and simulate runs), not in the signal: each set's [errors] lines, drawn
+STRUCTURE_SETS = ("housing4_structure", "pinring2_structure", "tilt39_structure", "crank40_structure")
 EXPECTED = {"housing156": "housing_stiffness_pattern", "crank40": "crank_eccentricity_error",
             "coaxiality": "output_coaxiality", "encoder500": "output_coaxiality",
             "pinring2": "pin_ring_pattern", "compliance4": "torsional_stiffness", "clean": None,
-            "tilt39": "pin_ring_tilt", "housing4_structure": "housing_stiffness_pattern"}
+            "tilt39": "pin_ring_tilt", "housing4_structure": "housing_stiffness_pattern",
+            "pinring2_structure": "pin_ring_pattern", "tilt39_structure": "pin_ring_tilt",
+            "crank40_structure": "crank_eccentricity_error"}
 MIN_GAIN = 0.6
 
 
@@ -74,7 +82,8 @@ def case_numbers(case_path: Path) -> dict:
     s1 = c["stage1"]
     return {"name": c["name"], "zp": zp, "zc": zp - 1, "ratio": 1.0 + s1["z2"] / s1["z1"] * zp,
             "rated_Nm": float(c["operation"]["rated_torque_Nm"]),
-            "flange_radius_mm": float(c["carrier"]["output_flange_radius_mm"])}
+            "flange_radius_mm": float(c["carrier"]["output_flange_radius_mm"]),
+            "cranks": int(c["carrier"]["crank_count"])}
 
 
 def read_csv(path: Path) -> tuple[list[str], dict]:
@@ -123,14 +132,38 @@ def clean_runs(args, nums, out: Path) -> dict:
     return runs
 
 
-def structure_runs(args, nums, rng, folder: Path) -> tuple[dict, dict]:
-    """The housing4_structure set's runs: a copy of the case with a 4-lobe pin support stiffness
-    pattern, its own geometry, mesh and FE stages, then `simulate` as for the clean runs; (runs, truth)."""
-    a, phase = rng.uniform(0.4, 0.8), rng.uniform(-180.0, 180.0)
+def structure_errors(name: str, rng, nums) -> tuple[str, dict]:
+    """The [errors] lines a structure set hides in the case, drawn from the ranges the module
+    docstring states, and its truth (the size drawn first, then the phase)."""
+    if name == "housing4_structure":
+        a, phase = rng.uniform(0.4, 0.8), rng.uniform(-180.0, 180.0)
+        return f"pin_stiffness_lobes = [[4, {a:.6f}, {phase:.6f}]]", {"order": 4 * nums["zc"],
+                                                                      "pin_stiffness_lobes": [4, a, phase]}
+    if name == "pinring2_structure":
+        a, phase = rng.uniform(3.0, 8.0), rng.uniform(-180.0, 180.0)
+        return f"pin_radial_lobes = [[2, {a:.6f}, {phase:.6f}]]", {"order": 2 * nums["zc"],
+                                                                   "pin_radial_lobes_um": [2, a, phase]}
+    if name == "tilt39_structure":
+        t, phase = rng.uniform(0.8, 3.0), rng.uniform(-180.0, 180.0)
+        return (f"pin_ring_tilt_um = {t:.6f}\npin_ring_tilt_phase_deg = {phase:.6f}",
+                {"order": nums["zc"], "pin_ring_tilt_um": t, "phase_deg": phase})
+    if name == "crank40_structure":
+        e = rng.uniform(4.0, 10.0) * rng.choice([-1.0, 1.0])
+        j = int(rng.integers(nums["cranks"]))
+        per = [0.0] * nums["cranks"]
+        per[j] = e
+        return (f"eccentric_error_um = [{', '.join(f'{v:.6f}' for v in per)}]",
+                {"order": nums["zp"], "eccentric_error_um": per})
+    raise ValueError(f"structure set {name!r}: allowed {', '.join(STRUCTURE_SETS)}")
+
+
+def structure_runs(name: str, args, nums, rng, folder: Path) -> tuple[dict, dict]:
+    """A structure set's runs: a copy of the case with the set's errors (structure_errors), its own
+    geometry, mesh and FE stages, then `simulate` as for the clean runs; (runs, truth)."""
+    lines, truth = structure_errors(name, rng, nums)
     folder.mkdir(parents=True, exist_ok=True)
-    text = re.sub(r'^name\s*=.*$', f'name = "{nums["name"]}-h4"', args.case.read_text(), count=1, flags=re.M)
-    text = re.sub(r"^\[errors\].*$", lambda m: m.group(0) + f"\npin_stiffness_lobes = [[4, {a:.6f}, {phase:.6f}]]",
-                  text, count=1, flags=re.M)
+    text = re.sub(r'^name\s*=.*$', f'name = "{nums["name"]}-{name}"', args.case.read_text(), count=1, flags=re.M)
+    text = re.sub(r"^\[errors\].*$", lambda m: m.group(0) + "\n" + lines, text, count=1, flags=re.M)
     case = folder / "case.toml"
     if not case.exists() or case.read_text() != text:
         case.write_text(text)
@@ -144,8 +177,7 @@ def structure_runs(args, nums, rng, folder: Path) -> tuple[dict, dict]:
             subprocess.run([sys.executable, "-m", "pipeline", *cmd, "--quiet"], check=True, cwd=ROOT)
             print(f"blind: {cmd[0]} of the structure case in {time.perf_counter() - t0:.0f} s", flush=True)
     copy = argparse.Namespace(**{**vars(args), "case": case, "stiffness": stiffness})
-    return clean_runs(copy, nums, folder / "runs"), {"set": "housing4_structure", "order": 4 * nums["zc"],
-                                                     "pin_stiffness_lobes": [4, a, phase]}
+    return clean_runs(copy, nums, folder / "runs"), {"set": name, **truth}
 
 
 def te_of(cols, ratio) -> np.ndarray:
@@ -202,7 +234,7 @@ def hidden(name: str, rng, nums, runs) -> tuple[dict, dict]:
 def make_set(name: str, args, nums, runs, folder: Path) -> tuple[list[Path], dict]:
     rng = np.random.default_rng([args.seed, (SETS + STRUCTURE_SETS).index(name)])
     if name in STRUCTURE_SETS:
-        runs, truth = structure_runs(args, nums, rng, folder.parent / "structure")
+        runs, truth = structure_runs(name, args, nums, rng, folder.parent / "structure")
         added = {k: 0.0 * c["time_s"] for k, c in runs.items()}
     else:
         added, truth = hidden(name, rng, nums, runs)
