@@ -5,6 +5,7 @@ held at its bound reported "beyond the stated range", a cause that does not expl
 not named.
 """
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -247,3 +248,40 @@ def test_library_tangents_predict_a_column_s_first_solves_and_change_no_equilibr
             warm = sim.simulate_record(sim.quasi_static_te, *column, rec, n)
     sim._CARRIERS.clear()
     assert np.max(np.abs(warm - cold)) < 1e-6
+
+
+def test_a_refit_after_a_drop_gets_what_the_first_fit_left_of_the_budget(monkeypatch):
+    """extension.extend: the evaluation budget is the extension's; a refit after a drop gets the rest,
+    at least REFIT_MIN_NFEV, and the first fit the whole of it."""
+    import pipeline.diagnosis.extension as X
+
+    class C:
+        def __init__(self, cid):
+            self.id = cid
+    a, b = C("a"), C("b")
+    budgets = []
+
+    def fake_fit(run, chosen, cols, fit_idx, hold_idx, max_nfev, warm=None):
+        budgets.append(max_nfev)
+        reasons = {c.id: ("below the noise floor" if c is b and len(budgets) == 1 else None) for c in chosen}
+        return SimpleNamespace(beyond_range=None), None, reasons, "", ({}, np.zeros(0)), spent[len(budgets) - 1]
+    monkeypatch.setattr(X, "_fit", fake_fit)
+    monkeypatch.setattr(X, "_unidentifiable", lambda *a, **k: [])
+    for spent, want in (([8, 3], [8, 2]), ([5, 3], [8, 3]), ([12, 3], [8, 2])):
+        budgets.clear()
+        ext, _, notes, dropped = X.extend(None, [a, b], {}, [0], [], 8)
+        assert budgets == want and dropped == ["b"] and any("b: below the noise floor" in n for n in notes)
+    assert X.REFIT_MIN_NFEV >= 1
+
+
+def test_a_batch_of_models_skips_the_ones_the_geometry_refuses():
+    """extension._prefetch_valid: a maker raising ValueError (a CaseError) is left to its caller; the
+    rest go to the workers as one batch, each with no tangent."""
+    from pipeline.diagnosis.extension import _prefetch_valid
+    seen = []
+
+    def bad():
+        raise ValueError("E zp >= R")
+    _prefetch_valid(seen.extend, [lambda: ("c1", "s1"), bad, lambda: ("c2", "s2")])
+    assert seen == [("c1", "s1", None), ("c2", "s2", None)]
+    _prefetch_valid(None, [bad])        # no workers: nothing made, nothing raised

@@ -4,6 +4,7 @@ residuals with chosen lines: what the extension removed is labelled by its cause
 'explained (no cause's line)' (report.NO_SINGLE_CAUSE), a line the extension put there is 'added by'
 its cause, a reported cause that did not move a line is not named for it; residual_orders.png has a
 panel per torque level and its labels never overlap."""
+import os
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -128,3 +129,23 @@ def test_crowded_labels_do_not_overlap_and_the_rest_is_left_to_the_table():
     assert n == len(boxes) and 8 <= n < len(rows)   # what fits nowhere is dropped, never overlapped
     assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
     plt.close(fig)
+
+
+def test_a_figure_drawn_beside_lands_and_a_failing_child_is_redone_here(tmp_path):
+    """report._beside: the forked figure's file exists once joined; where the child fails the call is
+    repeated in-process (its error would surface here)."""
+    from pipeline.diagnosis import report
+    calls = []
+
+    def write(path):
+        calls.append(path)
+        Path(path).write_text("drawn")
+    report._beside(write, tmp_path / "a.txt")()
+    assert (tmp_path / "a.txt").read_text() == "drawn"
+
+    def fails_in_child(path, parent=os.getpid()):
+        if os.getpid() != parent:
+            raise RuntimeError("child")
+        Path(path).write_text("here")
+    report._beside(fails_in_child, tmp_path / "b.txt")()
+    assert (tmp_path / "b.txt").read_text() == "here"
