@@ -139,9 +139,10 @@ def write_report(diag, case, out_dir) -> Path:
 
 def _beside(fn, *args):
     """Run fn(*args) in a forked process while the caller goes on (the two figures render on two
-    cores: the report 3.3 -> ~2 s of the 8 real records' diagnosis; the same PNG bytes, each written
-    atomically); returns the call that waits for it. Where fork is not available, or the child
-    fails, fn runs here (so its error surfaces as it would have)."""
+    cores; the residual-time figure was ~1 of the report's 3-5 s on the 8 real records; the same PNG
+    bytes, each written atomically); returns the call that waits for it. Where fork is not
+    available, or the child fails, fn runs here (so its error surfaces as it would have). Called
+    after the diagnosis' worker pool is shut down: no other thread holds a lock across the fork."""
     import multiprocessing as mp
     if "fork" not in mp.get_all_start_methods():
         fn(*args)
