@@ -47,9 +47,11 @@ stated range"); clean with no cause. Output: OUT/blind.json and OUT/blind.md (on
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import math
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -108,11 +110,43 @@ def write_csv(path: Path, comments, cols: dict) -> None:
     tmp.replace(path)
 
 
+def inputs_key(*parts) -> str:
+    """A digest of what a cached folder was made from: the given parts (texts, file bytes, numbers) and
+    the project's Python sources (the stages and `simulate` that made it), so a cache made by another
+    model or other inputs is never read back as this one's (the 2026-12-02 pinring2 pass could not be
+    reproduced from its own commit: a run on cached clean records of an earlier model is the likely
+    reason, bench/README)."""
+    h = hashlib.sha256()
+    for part in parts:
+        h.update(part if isinstance(part, bytes) else repr(part).encode())
+    for pkg in ("dynamics", "fem", "geometry", "pipeline"):
+        for f in sorted((ROOT / pkg).rglob("*.py")):
+            h.update(str(f.relative_to(ROOT)).encode())
+            h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def cache_is_current(folder: Path, key: str) -> bool:
+    """True when `folder` holds what `key` describes (its made_from.txt); otherwise the folder is
+    emptied so that it is made again."""
+    stamp = folder / "made_from.txt"
+    if stamp.is_file() and stamp.read_text().strip() == key:
+        return True
+    if folder.exists():
+        shutil.rmtree(folder)
+    return False
+
+
 def clean_runs(args, nums, out: Path) -> dict:
-    """{(torque, direction): columns of the steady part} from `pipeline simulate` (cached)."""
-    out.mkdir(parents=True, exist_ok=True)
+    """{(torque, direction): columns of the steady part} from `pipeline simulate` (cached in `out`
+    while the case, the stiffness, the speed and the project's sources are the ones it was made from)."""
     rev_s = 60.0 * nums["ratio"] / args.speed_rpm
     duration = LOAD_SETTLED_S + 1.03 * rev_s
+    stiffness = Path(args.stiffness) if args.stiffness else ROOT / "build" / nums["name"] / "fem" / "stiffness.json"
+    key = inputs_key(Path(args.case).read_bytes(), stiffness.read_bytes() if stiffness.is_file() else b"",
+                     args.speed_rpm, duration)
+    cache_is_current(out, key)
+    out.mkdir(parents=True, exist_ok=True)
     runs = {}
     for frac in args.torque_fractions:
         T = round(frac * nums["rated_Nm"], 1)
@@ -129,6 +163,7 @@ def clean_runs(args, nums, out: Path) -> dict:
             _, cols = read_csv(path)
             keep = cols["time_s"] >= LOAD_SETTLED_S
             runs[(T, d)] = {k: v[keep] for k, v in cols.items()}
+    (out / "made_from.txt").write_text(key + "\n")
     return runs
 
 
@@ -169,13 +204,15 @@ def structure_runs(name: str, args, nums, rng, folder: Path) -> tuple[dict, dict
         case.write_text(text)
     build = folder / "build"
     stiffness = build / "fem" / "stiffness.json"
-    if not stiffness.exists():
+    key = inputs_key(text)
+    if not cache_is_current(build, key):
         for cmd in (["geometry", "--case", str(case), "--out", str(build / "geometry")],
                     ["mesh", "--case", str(case), "--out", str(build / "mesh")],
                     ["fem", "--case", str(case), "--mesh", str(build / "mesh"), "--out", str(build / "fem")]):
             t0 = time.perf_counter()
             subprocess.run([sys.executable, "-m", "pipeline", *cmd, "--quiet"], check=True, cwd=ROOT)
             print(f"blind: {cmd[0]} of the structure case in {time.perf_counter() - t0:.0f} s", flush=True)
+        (build / "made_from.txt").write_text(key + "\n")
     copy = argparse.Namespace(**{**vars(args), "case": case, "stiffness": stiffness})
     return clean_runs(copy, nums, folder / "runs"), {"set": name, **truth}
 
