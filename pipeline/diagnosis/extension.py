@@ -295,16 +295,18 @@ def _verdicts(run: Run, chosen, ps, wanted, half_ci, lims, fit_idx, sims0, sims_
     fitted = [sims_after[k] for k in fit_idx]
     before = [run.meas[k] - s for k, s in zip(fit_idx, sims0)]
     after = [run.meas[k] - s for k, s in zip(fit_idx, fitted)]
-    without_ps = [[q if i != j else np.zeros_like(q) for i, q in enumerate(ps)] for j in range(len(chosen))]
+    # the model without each cause, built once: solved as one batch, then read one by one
+    without_models = [_apply(run.case, run.stiffness, chosen, [q if i != j else np.zeros_like(q)
+                                                                for i, q in enumerate(ps)])
+                      for j in range(len(chosen))]
     if run.prefetch is not None:
-        _prefetch_valid(lambda models: run.prefetch(models, fit_idx),
-                        [lambda o=o: _apply(run.case, run.stiffness, chosen, o) for o in without_ps])
+        run.prefetch([(*m, None) for m in without_models], fit_idx)
     for j, (c, p, pw, h, (lo, hi)) in enumerate(zip(chosen, ps, wanted, half_ci, lims)):
         names = [q.name for q in c.params(run.case)]
         vague = [f"{n} +- {v:.3g}" for n, v, a, z in zip(names, h, lo, hi) if 2.0 * v > z - a]
         on = [f"{n} = {w:.4g} (fit {v:.4g}, on or past its bound {b:g})" for n, v, w, a, z in zip(names, p, pw, lo, hi)
               for b in (a, z) if abs(v - b) <= AT_BOUND * (z - a) or (w - b) * (b - 0.5 * (a + z)) > 0]
-        without = run.te_of(*_apply(run.case, run.stiffness, chosen, without_ps[j]), fit_idx)
+        without = run.te_of(*without_models[j], fit_idx)
         effect_ts = [a - b for a, b in zip(fitted, without)]
         effect = rms(remove_offsets(effect_ts, groups))
         share = claimed_share(run, fit_idx, effect_ts, before, after)
@@ -391,9 +393,9 @@ class _Budget:
 
 def _prefetch_valid(prefetch, makers) -> None:
     """Solve the models `makers` build (each a () -> (case, stiffness)) as one batch on the workers
-    before they are evaluated one by one (the fit's start candidates, the verdicts' models without
-    each cause): the same equilibria to the Newton tolerance, the workers kept busy. A maker the
-    geometry refuses (CaseError, a ValueError) is left to its caller, which says why."""
+    before they are evaluated one by one (the fit's start candidates): the same equilibria to the
+    Newton tolerance, the workers kept busy. A maker the geometry refuses (CaseError, a ValueError)
+    is left to its caller, which says why."""
     if prefetch is None:
         return
     models = []
