@@ -285,3 +285,63 @@ def test_a_batch_of_models_skips_the_ones_the_geometry_refuses():
     _prefetch_valid(seen.extend, [lambda: ("c1", "s1"), bad, lambda: ("c2", "s2")])
     assert seen == [("c1", "s1", None), ("c2", "s2", None)]
     _prefetch_valid(None, [bad])        # no workers: nothing made, nothing raised
+
+
+def test_a_lazy_batch_caches_each_model_when_asked_and_in_order(monkeypatch):
+    """simulate.prefetch_models(lazy=True): every grid is submitted at once, model by model as the
+    generator builds them; ready(i) caches models 0..i in the order given, as the eager call does."""
+    from concurrent.futures import Future
+    monkeypatch.setattr(sim, "_steady_grids", lambda case, stiffness, records, n: (
+        (("k", case, r), case, np.zeros(2), np.zeros(2), 1, None) for r in records))
+    monkeypatch.setattr(sim, "_CARRIERS", {})
+
+    class Pool:                          # resolves at submit; records what went and when
+        def __init__(self):
+            self.sent = []
+
+        def submit(self, fn, mech, *rest):
+            self.sent.append((mech, len(built)))
+            f = Future()
+            f.set_result((np.full(2, float(len(self.sent))), None))
+            return f
+    built = []
+
+    def models():
+        for i in range(3):
+            built.append(i)
+            yield f"m{i}", None, None
+    pool = Pool()
+    ready = sim.prefetch_models(models(), ["r1", "r2"], 4, pool, lazy=True)
+    # each model's two grids left as soon as it was built, before the next one was
+    assert pool.sent == [("m0", 1), ("m0", 1), ("m1", 2), ("m1", 2), ("m2", 3), ("m2", 3)]
+    assert not sim._CARRIERS
+    ready(0)
+    assert list(sim._CARRIERS) == [("k", "m0", "r1"), ("k", "m0", "r2")]
+    ready(2)
+    assert [k[1] for k in sim._CARRIERS] == ["m0", "m0", "m1", "m1", "m2", "m2"]
+    assert np.array_equal(sim._CARRIERS[("k", "m1", "r2")], np.full(2, 4.0))
+    ready()
+    assert len(sim._CARRIERS) == 6
+    sim._CARRIERS.clear()                # eager: all cached on return, the same entries
+    assert sim.prefetch_models(models(), ["r1", "r2"], 4, Pool()) is None and len(sim._CARRIERS) == 6
+
+
+def test_the_jacobian_waits_for_each_column_just_before_its_difference():
+    """extension._jacobian: the columns' models go out as one lazy batch; column i's difference
+    waits only for column i (the workers solve the later ones meanwhile); J is the forward secant."""
+    from pipeline.diagnosis.extension import _jacobian
+    log = []
+
+    def prefetch(models, lazy=False):
+        log.append(("submit", len(list(models)), lazy))
+        return lambda i=None: log.append(("ready", i))
+
+    def fun(x):
+        log.append(("fun", tuple(np.round(x, 6))))
+        return np.array([x[0] ** 2, 3.0 * x[1]])
+    jac = _jacobian(fun, np.zeros((2, 2)), [(0, 2, 0.5)], lambda x: ("case", "stiff"), tag=("a", "b"),
+                    prefetch=prefetch)
+    J = jac(np.array([1.0, 2.0]))
+    assert log == [("fun", (1.0, 2.0)), ("submit", 2, True), ("ready", 0), ("fun", (1.5, 2.0)),
+                   ("ready", 1), ("fun", (1.0, 2.5))]
+    assert np.allclose(J, [[2.5, 0.0], [0.0, 3.0]])

@@ -149,3 +149,36 @@ def test_a_figure_drawn_beside_lands_and_a_failing_child_is_redone_here(tmp_path
         Path(path).write_text("here")
     report._beside(fails_in_child, tmp_path / "b.txt")()
     assert (tmp_path / "b.txt").read_text() == "here"
+
+
+def test_the_label_layouts_quick_rejects_agree_with_the_full_tests():
+    """report._hits / _crosses skip the clipping / orientation tests where the bounding boxes are apart:
+    the same answers as the full tests on random segments, boxes and leaders, edges touching included
+    (coordinates on a coarse grid so that touching and shared ends occur)."""
+    def clip(segment, box):                # the t-interval inside the open box, axis by axis
+        (x0, y0), (x1, y1) = segment
+        lo, hi = 0.0, 1.0
+        for a, b, low, high in ((x0, x1, box[0], box[2]), (y0, y1, box[1], box[3])):
+            if a == b:
+                lo, hi = (lo, hi) if low < a < high else (1.0, 0.0)
+            else:
+                ta, tb = sorted(((low - a) / (b - a), (high - a) / (b - a)))
+                lo, hi = max(lo, ta), min(hi, tb)
+        return hi - lo > 1e-6
+
+    def side(p, q, r):
+        v = (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+        return (v > 0) - (v < 0)
+    rng = np.random.default_rng(3)
+    pt = lambda: tuple(float(v) for v in rng.integers(0, 9, 2))   # noqa: E731
+    hits = crosses = 0
+    for _ in range(4000):
+        a, b = (pt(), pt()), (pt(), pt())
+        x, y = sorted(rng.integers(0, 9, 2)), sorted(rng.integers(0, 9, 2))
+        box = (float(x[0]), float(y[0]), float(x[1]) + 1.0, float(y[1]) + 1.0)
+        want = clip(a, box)
+        assert report._hits(a, box) == want
+        full = side(*a, b[0]) * side(*a, b[1]) < 0 and side(*b, a[0]) * side(*b, a[1]) < 0
+        assert report._crosses(a, b) == full
+        hits, crosses = hits + want, crosses + full
+    assert 400 < hits < 3600 and 100 < crosses < 3900      # both answers well represented

@@ -200,8 +200,8 @@ def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_ent
     extension, after, dropped = None, None, []
     if result.selected:
         # the fit's re-taken Jacobian columns, one batch on the workers (no pool: nothing to do)
-        def prefetch(models, idx):
-            prefetch_models(models, [records[k] for k in idx], points_per_rev, pool)
+        def prefetch(models, idx, lazy=False):
+            return prefetch_models(models, [records[k] for k in idx], points_per_rev, pool, lazy)
         def seed(columns, idx):
             seed_tangents(case, stiffness, [records[k] for k in idx], points_per_rev, columns)
         run = Run(case, stiffness, records, groups, meas, te_of, te_model, lib.fmaps, lib.w, noise, prefetch, seed)

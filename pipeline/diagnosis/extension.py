@@ -89,7 +89,8 @@ class Run:
     fmaps: list
     w: np.ndarray
     noise_arcsec: float              # the records' noise floor (effect sizes below it: dropped)
-    prefetch: object = None          # (models [(case, stiffness, tangent)], idx) -> None: solve their grids as a batch
+    prefetch: object = None          # (models [(case, stiffness, tangent)], idx, lazy=False) -> None or ready(i):
+                                     #   solve their grids as a batch (simulate.prefetch_models)
     seed: object = None              # (columns {tag: [(coef, (case, stiffness))]}, idx) -> None: first-iterate predictors
 
 
@@ -226,7 +227,7 @@ def _fit(run: Run, chosen, cols, fit_idx, hold_idx, max_nfev: int, warm=None):
         ps_w, off_w = warm
         z_w = [cols[c.id].V.T @ ps_w[c.id] if c.id in ps_w else np.zeros(cols[c.id].V.shape[1]) for c in chosen]
         starts.append(_project(np.r_[np.concatenate(z_w), off_w], chosen, cols, lims, lo, hi, nz))
-    prefetch = (lambda models: run.prefetch(models, fit_idx)) if run.prefetch is not None else None
+    prefetch = (lambda models, lazy=False: run.prefetch(models, fit_idx, lazy)) if run.prefetch is not None else None
     if len(starts) > 1:   # a threshold or nonlinear response (a coarse scan of its size), or a refit:
         _prefetch_valid(prefetch, [lambda x=x: model_at(x) for x in starts])
         x0 = min(starts, key=lambda x: _cost(fun, x))   # start from the best candidate by cost
@@ -484,8 +485,9 @@ def _jacobian(fun, J, spans, model_at=None, tag=(), prefetch=None):
     same column of the same cause in a refit after a drop shares its state change).
     A column is a secant over [x_j, x_j + h]: where no re-taken coordinate has moved by more than
     REUSE_SHARE h since the last re-take, the secants overlap by more than half and that Jacobian
-    is returned again instead of re-taking it. prefetch(models): the re-taken columns' models solved
-    as one batch first (Run.prefetch: the worker processes), so the differences read them cached."""
+    is returned again instead of re-taking it. prefetch(models, lazy=True): the re-taken columns' models
+    submitted as one batch first (Run.prefetch: the worker processes); each difference waits for its
+    column's solves and reads them cached while the workers solve the later columns."""
     last = {}
 
     def jac(x):
@@ -502,9 +504,12 @@ def _jacobian(fun, J, spans, model_at=None, tag=(), prefetch=None):
                 xj = x.copy()
                 xj[j] += h
                 steps.append((j, h, xj))
+        ready = None
         if prefetch is not None and base is not None:
-            prefetch([model_at(xj) + ((*base, tag[j]),) for j, _, xj in steps])
-        for j, h, xj in steps:
+            ready = prefetch((model_at(xj) + ((*base, tag[j]),) for j, _, xj in steps), lazy=True)
+        for i, (j, h, xj) in enumerate(steps):
+            if ready is not None:     # column i's solves in (the workers go on with the later ones)
+                ready(i)
             if base is None:
                 Jx[:, j] = (fun(xj) - r0) / h
             else:

@@ -334,14 +334,17 @@ def _layout(ax, items, seq) -> dict:
             y0 = float(ax.transAxes.transform((0.0, y))[1])
             if y0 + h > frame.y1 or (best is not None and (y - lo) / _ROW >= best[0]):
                 break            # the cost only grows from here (pruned: the same slot as the full search)
-            for s in sorted(np.arange(-1.5, 1.51, 0.125), key=abs):
-                xc = min(max(xp + float(s) * w, frame.x0 + w / 2), frame.x1 - w / 2)
+            for s in _SHIFTS:
+                xc = min(max(xp + s * w, frame.x0 + w / 2), frame.x1 - w / 2)
                 box = (xc - w / 2, y0, xc + w / 2, y0 + h)
                 leader = ((min(max(xp, box[0] + 4.0), box[2] - 4.0), y0), (xp, yp))
                 cost = (y - lo) / _ROW + abs(leader[0][0] - xp) / _SLANT_PX + 0.3 * abs(xc - xp) / w
                 if (best is not None and cost >= best[0]) or any(_overlap(box, b) for b, _ in placed):
                     continue     # no cheaper than the best even with nothing behind, or overlapping
-                cost += 100.0 * sum(_hits(leader, b) + _hits(l, box) + _crosses(leader, l) for b, l in placed)
+                for b, l in placed:   # 100 per conflict; stop once no cheaper than the best (same slot)
+                    cost += 100.0 * (_hits(leader, b) + _hits(l, box) + _crosses(leader, l))
+                    if best is not None and cost >= best[0]:
+                        break
                 if best is None or cost < best[0]:
                     best = (cost, box, leader, y)
         slots[i] = best
@@ -350,12 +353,21 @@ def _layout(ax, items, seq) -> dict:
     return slots
 
 
+_SHIFTS = tuple(float(s) for s in sorted(np.arange(-1.5, 1.51, 0.125), key=abs))   # label offsets [widths]
+
+
 def _overlap(a, b) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
 def _crosses(a, b) -> bool:
     """Do two leaders cross (strictly: a shared peak or end does not count)?"""
+    (ax0, ay0), (ax1, ay1) = a
+    (bx0, by0), (bx1, by1) = b
+    if (max(ax0, ax1) < min(bx0, bx1) or max(bx0, bx1) < min(ax0, ax1) or max(ay0, ay1) < min(by0, by1)
+            or max(by0, by1) < min(ay0, ay1)):
+        return False         # apart: a crossing point would lie in both bounding boxes
+
     def side(p, q, r):
         v = float((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
         return (v > 0) - (v < 0)
@@ -365,6 +377,8 @@ def _crosses(a, b) -> bool:
 def _hits(segment, box) -> bool:
     """Does the segment run through the box's inside (Liang-Barsky clipping)?"""
     (x0, y0), (x1, y1) = segment
+    if max(x0, x1) <= box[0] or min(x0, x1) >= box[2] or max(y0, y1) <= box[1] or min(y0, y1) >= box[3]:
+        return False         # beside the box (what the clipping below finds too, in far fewer steps)
     dx, dy = x1 - x0, y1 - y0
     t0, t1 = 0.0, 1.0
     for p, q in ((-dx, x0 - box[0]), (dx, box[2] - x0), (-dy, y0 - box[1]), (dy, box[3] - y0)):

@@ -47,14 +47,14 @@ def summarise(cause_id: str, records, cols: list[np.ndarray], max_order: int,
               rel: float = 0.1) -> SignatureSummary:
     amp = None
     shift, by_t = {}, {}
+    ks = np.arange(1, max_order + 1)
     for rec, c in zip(records, cols):
         a = np.zeros(max_order + 1)
         for j in range(c.shape[1]):   # every parameter: a cause's harmonics sit in different columns
             sp = spectrum_of(rec.output_angle_deg, c[:, j])
-            for k in range(1, max_order + 1):
-                idx = int(np.argmin(np.abs(sp.order - k)))
-                if abs(sp.order[idx] - k) < 0.5:
-                    a[k] = max(a[k], sp.amplitude[idx])
+            idx = np.argmin(np.abs(sp.order[None, :] - ks[:, None]), axis=1)   # the bin nearest each order k
+            on = np.abs(sp.order[idx] - ks) < 0.5
+            a[ks[on]] = np.maximum(a[ks[on]], sp.amplitude[idx[on]])
         amp = a if amp is None else np.maximum(amp, a)
         shift[rec.name] = float(np.mean(c[:, 0]))
         by_t[round(abs(rec.torque_Nm), 1)] = float(a.max())

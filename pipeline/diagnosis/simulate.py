@@ -221,9 +221,11 @@ def _carrier_deg(model, ang, T, direction, seeds=None) -> tuple[np.ndarray, np.n
     return np.rad2deg(carrier), Q
 
 
-def _solve_grid(mech, stiffness, ang, T, direction, seeds=None) -> tuple[np.ndarray, np.ndarray]:
-    """One grid's (carrier angles [deg], states) (a worker's task: module-level, picklable)."""
-    return _carrier_deg(model_for(mech, stiffness), ang, T, direction, seeds)
+def _solve_grid(mech, stiffness, ang, T, direction, seeds=None, digest=None) -> tuple[np.ndarray, np.ndarray]:
+    """One grid's (carrier angles [deg], states) (a worker's task: module-level, picklable). digest:
+    the stiffness' content digest as the caller keyed the solve (a worker receives a new object per
+    task, so it would hash the model again: ~1.6 ms a task, 1444 tasks on the 8 real records)."""
+    return _carrier_deg(model_for(mech, stiffness, digest), ang, T, direction, seeds)
 
 
 # Warm starts of the fit (statics.static_path `seeds`): within a `seeding()` scope, the states of the
@@ -370,33 +372,52 @@ def _prefetch(case, stiffness, records, n: int, pool) -> None:
     prefetch_models([(case, stiffness, None)], records, n, pool)
 
 
-def prefetch_models(models, records, n: int, pool) -> None:
+def prefetch_models(models, records, n: int, pool, lazy: bool = False):
     """Solve on `pool` every steady record's grid of every model in `models`, a list of (case,
     stiffness, tangent) with tangent None or the (base case, base stiffness, tag) of a Jacobian
     column (tangent_seeds): the fit's re-taken columns go to the workers as one batch instead of
     one model at a time (each model has only as many grids as records, fewer than a batch keeps two
     workers busy with). Seeds and the kept states are those the solves one by one would use, but
     for the fallback seeds (the last model solved before the batch rather than the previous column):
-    the same equilibria to the Newton tolerance."""
+    the same equilibria to the Newton tolerance.
+
+    Returns None once every grid is solved and cached; with `lazy`, right after submitting, a
+    `ready(i)` that waits for models 0..i (None: all) and caches them, in the order given, as the
+    eager call does (the same cache and seed stores, bit for bit): the caller works on model i
+    while the workers solve the later ones (the Jacobian's columns, extension._jacobian). The
+    caller must reach ready() for every model before it solves anything else."""
     if pool is None:
-        return
+        return None
     batches = []
     jobs: dict = {}
-    for case, stiffness, tangent in models:
-        mine: dict = {}
+    futures: dict = {}
+    for case, stiffness, tangent in models:     # (models may be a generator: each model's grids go to
+        mine: dict = {}                         # the workers as soon as it is built)
         with tangent_seeds(*tangent) if tangent is not None else contextlib.nullcontext():
             _grid_jobs(case, stiffness, records, n, mine)
         mine = {k: v for k, v in mine.items() if k not in jobs}
         jobs.update(mine)
         batches.append((tangent, list(mine)))
+        if len(jobs) >= 2:                      # fewer: solved where they are asked for (no pool's worth)
+            for k, (mech, stiff, ang, T, d, seeds) in jobs.items():
+                if k not in futures:
+                    futures[k] = pool.submit(_solve_grid, mech, stiff, ang, T, d, seeds, k[1])
     if len(jobs) < 2:
-        return
-    futures = {k: pool.submit(_solve_grid, mech, stiff, ang, T, d, seeds)
-               for k, (mech, stiff, ang, T, d, seeds) in jobs.items()}
-    for tangent, keys in batches:          # kept in the order the models were given, in their scopes
-        with tangent_seeds(*tangent) if tangent is not None else contextlib.nullcontext():
-            for k in keys:
-                _cached(_CARRIERS, k, lambda: _seeded(k, futures[k].result()))
+        return None
+    done = [0]
+
+    def ready(i: int | None = None) -> None:
+        upto = len(batches) if i is None else min(i + 1, len(batches))
+        while done[0] < upto:              # kept in the order the models were given, in their scopes
+            tangent, keys = batches[done[0]]
+            with tangent_seeds(*tangent) if tangent is not None else contextlib.nullcontext():
+                for k in keys:
+                    _cached(_CARRIERS, k, lambda: _seeded(k, futures[k].result()))
+            done[0] += 1
+    if lazy:
+        return ready
+    ready()
+    return None
 
 
 def simulate_records(te_model: TEModel, case, stiffness, records, points_per_rev: int | None = None,
