@@ -159,8 +159,8 @@ def diagnose(case, stiffness, records: list[BenchRecord], te_model: TEModel = qu
                              p_enter=p_enter, p_line=p_line, max_nfev=max_nfev, holdout=holdout,
                              holdout_records=holdout_records)
     finally:
-        if pool is not None:
-            pool.shutdown()
+        if pool is not None:     # after an error, the batch's queued solves are not waited for
+            pool.shutdown(cancel_futures=True)
 
 
 def _diagnose(case, stiffness, records, te_model, pool, *, points_per_rev, p_enter, p_line, max_nfev, holdout,
