@@ -224,7 +224,8 @@ def _carrier_deg(model, ang, T, direction, seeds=None) -> tuple[np.ndarray, np.n
 def _solve_grid(mech, stiffness, ang, T, direction, seeds=None, digest=None) -> tuple[np.ndarray, np.ndarray]:
     """One grid's (carrier angles [deg], states) (a worker's task: module-level, picklable). digest:
     the stiffness' content digest as the caller keyed the solve (a worker receives a new object per
-    task, so it would hash the model again: ~1.6 ms a task, 1444 tasks on the 8 real records)."""
+    task, so it would hash the model again: 1.6 ms alone, the workers' time 93.2 -> 87.5 s over the
+    1444 tasks of the 8 real records)."""
     return _carrier_deg(model_for(mech, stiffness, digest), ang, T, direction, seeds)
 
 
