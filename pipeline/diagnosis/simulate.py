@@ -392,6 +392,7 @@ def prefetch_models(models, records, n: int, pool, lazy: bool = False):
     batches = []
     jobs: dict = {}
     futures: dict = {}
+    unsent: list = []                           # jobs held while the batch has fewer than two
     for case, stiffness, tangent in models:     # (models may be a generator: each model's grids go to
         mine: dict = {}                         # the workers as soon as it is built)
         with tangent_seeds(*tangent) if tangent is not None else contextlib.nullcontext():
@@ -399,10 +400,11 @@ def prefetch_models(models, records, n: int, pool, lazy: bool = False):
         mine = {k: v for k, v in mine.items() if k not in jobs}
         jobs.update(mine)
         batches.append((tangent, list(mine)))
+        unsent.extend(mine.items())
         if len(jobs) >= 2:                      # fewer: solved where they are asked for (no pool's worth)
-            for k, (mech, stiff, ang, T, d, seeds) in jobs.items():
-                if k not in futures:
-                    futures[k] = pool.submit(_solve_grid, mech, stiff, ang, T, d, seeds, k[1])
+            for k, (mech, stiff, ang, T, d, seeds) in unsent:
+                futures[k] = pool.submit(_solve_grid, mech, stiff, ang, T, d, seeds, k[1])
+            unsent.clear()
     if len(jobs) < 2:
         return None
     done = [0]
